@@ -1,0 +1,195 @@
+"""Data types passed between the sensors and the perception stack.
+
+Every array is float64 numpy in SI units (metres, radians, seconds) unless stated. Frames are
+defined in :mod:`perception.geometry`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from perception.geometry import FloatArray, camera_rotation
+
+POLE_COLOURS: tuple[str, ...] = ("pink", "yellow", "blue", "green")
+
+
+@dataclass(frozen=True, kw_only=True)
+class PoleCode:
+    """A two-coloured landmark pole: ``landmark_id`` and the colours of its upper and lower band."""
+
+    landmark_id: int
+    top: str
+    bottom: str
+
+    def __post_init__(self) -> None:
+        for name, colour in (("top", self.top), ("bottom", self.bottom)):
+            if colour not in POLE_COLOURS:
+                raise ValueError(f"PoleCode.{name} must be one of {POLE_COLOURS}, got {colour!r}")
+        if (self.top == "pink") == (self.bottom == "pink"):
+            raise ValueError(
+                f"PoleCode needs exactly one pink band, got top={self.top!r} bottom={self.bottom!r}"
+            )
+
+
+@dataclass(frozen=True, kw_only=True)
+class PoleGeometry:
+    """Heights of a landmark pole's bands above the ground (m) and its radius (m)."""
+
+    radius_m: float = 0.05  # pole radius
+    base_top_m: float = 0.40  # top of the white base = bottom of the lower colour band
+    band_height_m: float = 0.20  # height of each colour band
+
+    def __post_init__(self) -> None:
+        for name in ("radius_m", "base_top_m", "band_height_m"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"PoleGeometry.{name} must be finite and > 0, got {value}")
+
+    @property
+    def lower_centre_m(self) -> float:
+        """Height of the lower band's centre (m)."""
+        return self.base_top_m + 0.5 * self.band_height_m
+
+    @property
+    def upper_centre_m(self) -> float:
+        """Height of the upper band's centre (m)."""
+        return self.base_top_m + 1.5 * self.band_height_m
+
+    @property
+    def top_m(self) -> float:
+        """Height of the pole's top (m)."""
+        return self.base_top_m + 2.0 * self.band_height_m
+
+
+@dataclass(frozen=True, kw_only=True)
+class CameraModel:
+    """Pinhole intrinsics of an undistorted camera: image size (px) and horizontal FOV (deg).
+
+    Square pixels; the principal point is the image centre.
+    """
+
+    width: int = 320
+    height: int = 240
+    hfov_deg: float = 56.3  # Nao v6 camera horizontal field of view
+
+    def __post_init__(self) -> None:
+        for name in ("width", "height"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or isinstance(value, bool) or value < 16:
+                raise ValueError(f"CameraModel.{name} must be an int >= 16, got {value!r}")
+        if not (0.0 < self.hfov_deg < 180.0):
+            raise ValueError(f"CameraModel.hfov_deg must be in (0, 180), got {self.hfov_deg}")
+
+    @property
+    def fx(self) -> float:
+        """Focal length (px) along the image rows."""
+        return 0.5 * self.width / math.tan(math.radians(self.hfov_deg) / 2.0)
+
+    @property
+    def fy(self) -> float:
+        """Focal length (px) along the image columns (square pixels: equal to ``fx``)."""
+        return self.fx
+
+    @property
+    def cx(self) -> float:
+        """Principal point column (px)."""
+        return 0.5 * self.width
+
+    @property
+    def cy(self) -> float:
+        """Principal point row (px)."""
+        return 0.5 * self.height
+
+    @property
+    def vfov_deg(self) -> float:
+        """Vertical field of view (deg) implied by the aspect ratio."""
+        return math.degrees(2.0 * math.atan(0.5 * self.height / self.fy))
+
+
+@dataclass(frozen=True, kw_only=True)
+class CameraState:
+    """Where the camera is on the robot when a frame was taken, as the robot's joints report it.
+
+    ``position`` is the optical centre (3,) in the robot frame (m); ``head_yaw``/``head_pitch``
+    are the joint angles (rad) and ``tilt`` the camera's fixed downward tilt in the head (rad).
+    """
+
+    position: FloatArray
+    head_yaw: float
+    head_pitch: float
+    tilt: float = 0.0
+
+    def rotation(self) -> FloatArray:
+        """(3, 3) camera-to-robot rotation."""
+        return camera_rotation(self.head_yaw, self.head_pitch + self.tilt)
+
+
+@dataclass(frozen=True, kw_only=True)
+class LandmarkObservation:
+    """One landmark sighting in the robot frame: range (m), bearing (rad) and their covariance.
+
+    ``cov`` is (2, 2) over ``(range, bearing)``. ``pixel`` is the (2,) image point the bearing was
+    taken from; ``box`` is ``(u0, v0, u1, v1)`` in pixels.
+    """
+
+    landmark_id: int
+    range_m: float
+    bearing_rad: float
+    cov: FloatArray
+    pixel: FloatArray = field(default_factory=lambda: np.full(2, np.nan))
+    box: FloatArray = field(default_factory=lambda: np.full(4, np.nan))
+    score: float = 1.0
+
+
+@dataclass(frozen=True, kw_only=True)
+class SensorFrame:
+    """What the robot's sensors deliver in one control step.
+
+    - ``odometry_delta`` (3,): motion since the last frame in the previous odometry pose's frame;
+    - ``image``: (H, W, 3) uint8 RGB or ``None`` when no frame was taken;
+    - ``sonar``: (3, E) echo distances (m) of the left/middle/right sectors, NaN-padded, or ``None``;
+    - ``laser``: (B,) ranges (m) with NaN for no return, or ``None``.
+    """
+
+    time_s: float
+    odometry_delta: FloatArray
+    camera: CameraModel
+    camera_state: CameraState
+    image: NDArray[np.uint8] | None = None
+    sonar: FloatArray | None = None
+    laser: FloatArray | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class SlamEstimate:
+    """The robot pose and landmark map believed by a SLAM back end (field frame).
+
+    ``pose`` (3,), ``pose_cov`` (3, 3); ``landmark_ids`` (L,) int; ``landmarks`` (L, 2);
+    ``landmark_covs`` (L, 2, 2).
+    """
+
+    pose: FloatArray
+    pose_cov: FloatArray
+    landmark_ids: NDArray[np.int64]
+    landmarks: FloatArray
+    landmark_covs: FloatArray
+
+
+@dataclass(frozen=True, kw_only=True)
+class PerceptionOutput:
+    """Everything the perception stack believes after one step.
+
+    ``slam`` is the pose and map estimate; ``odometry_pose`` (3,) the dead-reckoned pose in the
+    field frame (same start as SLAM); ``observations`` this step's landmark sightings;
+    ``last_seen_s`` maps a landmark id to the time (s) of its last sighting.
+    """
+
+    time_s: float
+    slam: SlamEstimate
+    odometry_pose: FloatArray
+    observations: tuple[LandmarkObservation, ...]
+    last_seen_s: dict[int, float]

@@ -1,0 +1,185 @@
+"""A Nao-sized robot made of primitive shapes, with an omnidirectional walk and a head.
+
+The walk is kinematic: the body follows the commanded velocity within Nao-like speed and
+acceleration limits, and sways with the gait (roll, pitch and bob), which moves the camera in a
+way the robot's joint sensors do not report. Head yaw and pitch follow targets within the Nao v6
+joint limits and a speed limit. Frames: see :mod:`perception.geometry`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from perception.geometry import FloatArray, camera_rotation, compose, rot_x, rot_y, rot_z
+from perception.types import CameraState
+from spl_env.sim.world import BulletWorld, LinkSpec, VisualPart
+
+NAO_GREY = (0.82, 0.82, 0.84, 1.0)
+TEAM_JERSEY_RGBA = ((0.12, 0.22, 0.80, 1.0), (0.85, 0.12, 0.10, 1.0))
+TEAM_WAISTBAND_RGBA = ((0.05, 0.10, 0.55, 1.0), (0.65, 0.05, 0.05, 1.0))
+
+
+@dataclass(frozen=True, kw_only=True)
+class RobotConfig:
+    """Nao v6 body numbers and walk/head limits."""
+
+    body_radius_m: float = 0.15  # plan-view radius used for collisions between robots
+    max_speed: tuple[float, float, float] = (0.25, 0.15, 1.0)  # vx, vy (m/s), omega (rad/s)
+    max_accel: tuple[float, float, float] = (0.5, 0.4, 2.0)  # m/s^2, m/s^2, rad/s^2
+    head_yaw_limit_rad: float = math.radians(119.5)  # Nao v6 HeadYaw range ±119.5°
+    head_pitch_min_rad: float = math.radians(-38.5)  # Nao v6 HeadPitch, up
+    head_pitch_max_rad: float = math.radians(29.5)  # Nao v6 HeadPitch, down
+    head_speed_rps: float = 4.0  # head joint speed limit (rad/s)
+    head_yaw_joint_height_m: float = 0.44  # above the ground, standing
+    camera_offset_m: tuple[float, float, float] = (0.0587, 0.0, 0.0636)  # top camera in head frame
+    head_pitch_joint_offset_m: float = 0.017  # HeadPitch above HeadYaw
+    camera_tilt_rad: float = math.radians(1.2)  # Nao v6 top camera tilt in the head
+    gait_frequency_hz: float = 1.6  # full gait cycles per second while walking
+    sway_roll_rad: float = 0.035  # torso roll amplitude at full walking speed
+    sway_pitch_rad: float = 0.012  # torso pitch amplitude at full walking speed
+    sway_bob_m: float = 0.008  # vertical bob amplitude at full walking speed
+
+    def __post_init__(self) -> None:
+        for name in ("max_speed", "max_accel"):
+            values = getattr(self, name)
+            if len(values) != 3 or not all(math.isfinite(v) and v > 0 for v in values):
+                raise ValueError(f"RobotConfig.{name} must be 3 finite values > 0, got {values}")
+        for name in ("body_radius_m", "head_yaw_limit_rad", "head_speed_rps",
+                     "head_yaw_joint_height_m", "gait_frequency_hz"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"RobotConfig.{name} must be finite and > 0, got {value}")
+        if not self.head_pitch_min_rad < 0 < self.head_pitch_max_rad:
+            raise ValueError(
+                "RobotConfig needs head_pitch_min_rad < 0 < head_pitch_max_rad, got "
+                f"{self.head_pitch_min_rad} and {self.head_pitch_max_rad}"
+            )
+        for name in ("sway_roll_rad", "sway_pitch_rad", "sway_bob_m"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"RobotConfig.{name} must be finite and >= 0, got {value}")
+
+
+def _body_parts(team: int) -> list[VisualPart]:
+    """Legs, waistband, jersey and arms of a standing Nao (about 0.57 m tall with the head)."""
+    parts = [
+        VisualPart(shape="box", size=(0.045, 0.035, 0.13), position=(0.0, y, 0.13), rgba=NAO_GREY)
+        for y in (-0.05, 0.05)
+    ]
+    parts.append(VisualPart(shape="box", size=(0.055, 0.085, 0.02), position=(0.0, 0.0, 0.28),
+                            rgba=TEAM_WAISTBAND_RGBA[team]))
+    parts.append(VisualPart(shape="box", size=(0.05, 0.08, 0.07), position=(0.0, 0.0, 0.37),
+                            rgba=TEAM_JERSEY_RGBA[team]))
+    parts += [
+        VisualPart(shape="box", size=(0.03, 0.025, 0.1), position=(0.0, y, 0.34), rgba=NAO_GREY)
+        for y in (-0.11, 0.11)
+    ]
+    return parts
+
+
+class NaoRobot:
+    """One robot in a :class:`BulletWorld`: pose, walk state, head joints and camera geometry."""
+
+    def __init__(self, world: BulletWorld, name: str, *, team: int, config: RobotConfig) -> None:
+        if team not in (0, 1):
+            raise ValueError(f"team must be 0 or 1, got {team!r}")
+        self.world = world
+        self.name = name
+        self.team = team
+        self.config = config
+        head = VisualPart(shape="box", size=(0.05, 0.065, 0.06), position=(0.0, 0.0, 0.045),
+                          rgba=NAO_GREY)
+        world.add_articulated(name, _body_parts(team), [
+            LinkSpec(parent=0, offset=(0.0, 0.0, config.head_yaw_joint_height_m), axis=(0, 0, 1)),
+            LinkSpec(parent=1, offset=(0.0, 0.0, config.head_pitch_joint_offset_m), axis=(0, 1, 0),
+                     parts=(head,)),
+        ])
+        self.pose = np.zeros(3)
+        self.velocity = np.zeros(3)
+        self.head = np.zeros(2)
+        self.gait_phase = 0.0
+
+    def place(self, pose: FloatArray, head: FloatArray = np.zeros(2)) -> None:
+        """Put the robot standing still at ``pose`` (3,) with head angles (2,) (rad)."""
+        self.pose = np.asarray(pose, dtype=np.float64).copy()
+        self.velocity = np.zeros(3)
+        self.head = np.asarray(head, dtype=np.float64).copy()
+        self.gait_phase = 0.0
+        self.sync()
+
+    def walk_step(self, command: FloatArray, dt_s: float) -> FloatArray:
+        """Advance the walk by ``dt_s`` towards ``command`` (vx, vy m/s, omega rad/s).
+
+        The velocity changes at most by the acceleration limits and stays within the speed
+        limits. Returns the walk engine's increment (3,) in the robot frame; the caller decides
+        whether the body may move there (see :meth:`commit_motion`).
+        """
+        cfg = self.config
+        target = np.clip(command, -np.asarray(cfg.max_speed), np.asarray(cfg.max_speed))
+        max_change = np.asarray(cfg.max_accel) * dt_s
+        self.velocity = self.velocity + np.clip(target - self.velocity, -max_change, max_change)
+        speed = float(np.max(np.abs(self.velocity) / np.asarray(cfg.max_speed)))
+        self.gait_phase = (self.gait_phase + 2 * math.pi * cfg.gait_frequency_hz * dt_s
+                           * (speed > 1e-3)) % (2 * math.pi)
+        vx, vy, omega = self.velocity * dt_s
+        if abs(omega) < 1e-9:
+            return np.array([vx, vy, 0.0])
+        # constant body-frame twist over the step: exact arc increment
+        s, c = math.sin(omega), math.cos(omega)
+        return np.array([(vx * s - vy * (1 - c)) / omega, (vx * (1 - c) + vy * s) / omega, omega])
+
+    def commit_motion(self, increment: FloatArray | None) -> None:
+        """Move by ``increment`` (3,) robot frame, or stop where blocked (``None``)."""
+        if increment is None:
+            self.velocity = np.zeros(3)
+        else:
+            self.pose = compose(self.pose, increment)
+
+    def move_head(self, target: FloatArray, dt_s: float) -> None:
+        """Turn the head towards ``target`` (yaw, pitch) rad within joint and speed limits."""
+        cfg = self.config
+        lo = np.array([-cfg.head_yaw_limit_rad, cfg.head_pitch_min_rad])
+        hi = np.array([cfg.head_yaw_limit_rad, cfg.head_pitch_max_rad])
+        goal = np.clip(target, lo, hi)  # targets beyond a joint stop end at the stop
+        step = cfg.head_speed_rps * dt_s
+        self.head = self.head + np.clip(goal - self.head, -step, step)
+
+    def sway(self) -> tuple[float, float, float]:
+        """Current torso roll, pitch (rad) and bob (m) from the gait phase and walking speed."""
+        cfg = self.config
+        speed = float(np.max(np.abs(self.velocity) / np.asarray(cfg.max_speed)))
+        phase = self.gait_phase
+        return (cfg.sway_roll_rad * speed * math.sin(phase),
+                cfg.sway_pitch_rad * speed * math.sin(2 * phase),
+                cfg.sway_bob_m * speed * (math.cos(2 * phase) - 1) / 2)
+
+    def sync(self) -> None:
+        """Push pose, sway and head joints into the physics world."""
+        roll, pitch, bob = self.sway()
+        self.world.set_pose(self.name, (self.pose[0], self.pose[1], bob), self.pose[2],
+                            roll=roll, pitch=pitch)
+        self.world.set_joint(self.name, 0, float(self.head[0]))
+        self.world.set_joint(self.name, 1, float(self.head[1]))
+
+    def camera_state(self) -> CameraState:
+        """The camera pose the robot's joint sensors report (no sway): robot frame."""
+        cfg = self.config
+        head_rot = rot_z(self.head[0]) @ rot_y(self.head[1])
+        neck = np.array([0.0, 0.0, cfg.head_yaw_joint_height_m])
+        pitch_joint = neck + rot_z(self.head[0]) @ np.array([0.0, 0.0, cfg.head_pitch_joint_offset_m])
+        position = pitch_joint + head_rot @ np.asarray(cfg.camera_offset_m)
+        return CameraState(position=position, head_yaw=float(self.head[0]),
+                           head_pitch=float(self.head[1]), tilt=cfg.camera_tilt_rad)
+
+    def camera_pose_world(self) -> tuple[FloatArray, FloatArray]:
+        """True camera position (3,) and rotation (3, 3) in the field frame, sway included."""
+        roll, pitch, bob = self.sway()
+        body = rot_z(self.pose[2]) @ rot_y(pitch) @ rot_x(roll)
+        state = self.camera_state()
+        position = np.array([self.pose[0], self.pose[1], bob]) + body @ state.position
+        rotation = rot_z(self.pose[2]) @ camera_rotation(
+            state.head_yaw, state.head_pitch + state.tilt, body_roll=roll, body_pitch=pitch)
+        return position, rotation

@@ -1,0 +1,273 @@
+"""BulletWorld: the one module that talks to PyBullet.
+
+Each world owns its own ``p.DIRECT`` physics client and passes ``physicsClientId`` on every call,
+so several worlds live side by side in one process. Bodies are addressed by name.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pybullet as p
+from numpy.typing import NDArray
+
+from perception.geometry import FloatArray
+
+MAX_PARTS_PER_BODY = 16  # PyBullet's shape arrays crash beyond 16 shapes
+
+
+@dataclass(frozen=True, kw_only=True)
+class VisualPart:
+    """One primitive of a compound static body: a box (half extents) or a cylinder/sphere.
+
+    ``shape`` is ``"box"``, ``"cylinder"`` or ``"sphere"``; ``size`` is the box half extents
+    (3,) or ``(radius, length)`` for cylinders or ``(radius,)`` for spheres (m); ``position`` (3,)
+    is relative to the body origin; ``yaw`` (rad) rotates the part about z; ``rgba`` in [0, 1].
+    """
+
+    shape: str
+    size: tuple[float, ...]
+    position: tuple[float, float, float]
+    rgba: tuple[float, float, float, float]
+    yaw: float = 0.0
+
+
+@dataclass(frozen=True, kw_only=True)
+class Lighting:
+    """Tiny-renderer lighting of one frame: direction (3,) towards the light, RGB colour, coefficients."""
+
+    direction: tuple[float, float, float] = (0.3, 0.2, 1.0)
+    colour: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    ambient: float = 0.6
+    diffuse: float = 0.4
+    specular: float = 0.05
+
+
+class BulletWorld:
+    """A PyBullet ``DIRECT`` client with named bodies, stepping, ray casts and rendering."""
+
+    def __init__(self, *, time_step_s: float, gravity_mps2: float = 9.81) -> None:
+        if not (0.0 < time_step_s <= 0.1):
+            raise ValueError(f"time_step_s must be in (0, 0.1] s, got {time_step_s}")
+        self._client: int | None = p.connect(p.DIRECT)
+        self._bodies: dict[str, int] = {}
+        self._names: dict[int, str] = {}
+        self.time_step_s = time_step_s
+        p.setGravity(0.0, 0.0, -gravity_mps2, physicsClientId=self.client)
+        p.setTimeStep(time_step_s, physicsClientId=self.client)
+
+    @property
+    def client(self) -> int:
+        """The PyBullet client id; raises after :meth:`close`."""
+        if self._client is None:
+            raise RuntimeError("BulletWorld is closed")
+        return self._client
+
+    # ----- bodies -------------------------------------------------------------------------
+    def _register(self, name: str, body_id: int) -> int:
+        if name in self._bodies:
+            raise ValueError(f"body name {name!r} is already used")
+        self._bodies[name] = body_id
+        self._names[body_id] = name
+        return body_id
+
+    def body(self, name: str) -> int:
+        """The body id of ``name``."""
+        return self._bodies[name]
+
+    def name_of(self, body_id: int) -> str | None:
+        """The name of ``body_id``, or ``None`` for unknown ids (e.g. -1, no hit)."""
+        return self._names.get(body_id)
+
+    @property
+    def body_names(self) -> tuple[str, ...]:
+        """All registered names, in creation order."""
+        return tuple(self._bodies)
+
+    def add_static(
+        self, name: str, parts: Sequence[VisualPart], *, collide: bool = True,
+        base_position: Sequence[float] = (0.0, 0.0, 0.0),
+    ) -> int:
+        """A fixed compound body of primitives; with ``collide`` each part also collides."""
+        vis = self._shape_array(parts, visual=True)
+        col = self._shape_array(parts, visual=False) if collide else -1
+        body_id = p.createMultiBody(
+            baseMass=0.0, baseCollisionShapeIndex=col, baseVisualShapeIndex=vis,
+            basePosition=list(base_position), physicsClientId=self.client,
+        )
+        return self._register(name, body_id)
+
+    def add_sphere(
+        self, name: str, *, radius_m: float, mass_kg: float, position: Sequence[float],
+        rgba: Sequence[float], rolling_friction: float, restitution: float,
+    ) -> int:
+        """A dynamic sphere (the ball)."""
+        col = p.createCollisionShape(p.GEOM_SPHERE, radius=radius_m, physicsClientId=self.client)
+        vis = p.createVisualShape(
+            p.GEOM_SPHERE, radius=radius_m, rgbaColor=list(rgba), physicsClientId=self.client
+        )
+        body_id = p.createMultiBody(
+            baseMass=mass_kg, baseCollisionShapeIndex=col, baseVisualShapeIndex=vis,
+            basePosition=list(position), physicsClientId=self.client,
+        )
+        p.changeDynamics(
+            body_id, -1, rollingFriction=rolling_friction, spinningFriction=rolling_friction,
+            restitution=restitution, lateralFriction=0.6, linearDamping=0.0, angularDamping=0.0,
+            physicsClientId=self.client,
+        )
+        return self._register(name, body_id)
+
+    def add_articulated(
+        self, name: str, base_parts: Sequence[VisualPart], links: Sequence[LinkSpec],
+    ) -> int:
+        """A kinematic (mass 0) body with revolute links, e.g. a robot with a head."""
+        vis = self._shape_array(base_parts, visual=True)
+        col = self._shape_array(base_parts, visual=False)
+        link_vis = [self._shape_array(link.parts, visual=True) if link.parts else -1
+                    for link in links]
+        body_id = p.createMultiBody(
+            baseMass=0.0, baseCollisionShapeIndex=col, baseVisualShapeIndex=vis,
+            basePosition=[0.0, 0.0, 0.0],
+            linkMasses=[0.0] * len(links),
+            linkCollisionShapeIndices=[-1] * len(links),
+            linkVisualShapeIndices=link_vis,
+            linkPositions=[list(link.offset) for link in links],
+            linkOrientations=[[0.0, 0.0, 0.0, 1.0]] * len(links),
+            linkInertialFramePositions=[[0.0, 0.0, 0.0]] * len(links),
+            linkInertialFrameOrientations=[[0.0, 0.0, 0.0, 1.0]] * len(links),
+            linkParentIndices=[link.parent for link in links],
+            linkJointTypes=[p.JOINT_REVOLUTE] * len(links),
+            linkJointAxis=[list(link.axis) for link in links],
+            physicsClientId=self.client,
+        )
+        return self._register(name, body_id)
+
+    def _shape_array(self, parts: Sequence[VisualPart], *, visual: bool) -> int:
+        if not 1 <= len(parts) <= MAX_PARTS_PER_BODY:
+            raise ValueError(
+                f"parts must hold 1 to {MAX_PARTS_PER_BODY} shapes per body, got {len(parts)}"
+            )
+        kinds = {"box": p.GEOM_BOX, "cylinder": p.GEOM_CYLINDER, "sphere": p.GEOM_SPHERE}
+        for part in parts:
+            if part.shape not in kinds:
+                raise ValueError(f"VisualPart.shape must be one of {sorted(kinds)}, got {part.shape!r}")
+        shape_types = [kinds[part.shape] for part in parts]
+        half_extents = [list(part.size) if part.shape == "box" else [0.0, 0.0, 0.0]
+                        for part in parts]
+        radii = [part.size[0] if part.shape != "box" else 0.0 for part in parts]
+        lengths = [part.size[1] if part.shape == "cylinder" else 0.0 for part in parts]
+        positions = [list(part.position) for part in parts]
+        orientations = [list(p.getQuaternionFromEuler([0.0, 0.0, part.yaw])) for part in parts]
+        if visual:
+            return int(p.createVisualShapeArray(
+                shapeTypes=shape_types, halfExtents=half_extents, radii=radii, lengths=lengths,
+                rgbaColors=[list(part.rgba) for part in parts],
+                visualFramePositions=positions, visualFrameOrientations=orientations,
+                physicsClientId=self.client,
+            ))
+        return int(p.createCollisionShapeArray(
+            shapeTypes=shape_types, halfExtents=half_extents, radii=radii, lengths=lengths,
+            collisionFramePositions=positions, collisionFrameOrientations=orientations,
+            physicsClientId=self.client,
+        ))
+
+    def set_texture(self, name: str, texture_path: str) -> None:
+        """Paint ``texture_path`` (PNG) on body ``name``'s base visual."""
+        tex = p.loadTexture(texture_path, physicsClientId=self.client)
+        p.changeVisualShape(self.body(name), -1, textureUniqueId=tex, physicsClientId=self.client)
+
+    # ----- state --------------------------------------------------------------------------
+    def set_pose(self, name: str, position: Sequence[float], yaw: float,
+                 roll: float = 0.0, pitch: float = 0.0) -> None:
+        """Teleport body ``name`` to ``position`` (3,) with the given Euler angles (rad)."""
+        quat = p.getQuaternionFromEuler([roll, pitch, yaw])
+        p.resetBasePositionAndOrientation(
+            self.body(name), list(position), quat, physicsClientId=self.client
+        )
+
+    def position(self, name: str) -> FloatArray:
+        """World position (3,) of body ``name``'s base."""
+        pos, _ = p.getBasePositionAndOrientation(self.body(name), physicsClientId=self.client)
+        return np.asarray(pos, dtype=np.float64)
+
+    def velocity(self, name: str) -> FloatArray:
+        """Linear velocity (3,) of body ``name`` (m/s)."""
+        lin, _ = p.getBaseVelocity(self.body(name), physicsClientId=self.client)
+        return np.asarray(lin, dtype=np.float64)
+
+    def set_velocity(self, name: str, linear: Sequence[float],
+                     angular: Sequence[float] = (0.0, 0.0, 0.0)) -> None:
+        """Set body ``name``'s linear (m/s) and angular (rad/s) velocity."""
+        p.resetBaseVelocity(self.body(name), list(linear), list(angular),
+                            physicsClientId=self.client)
+
+    def set_joint(self, name: str, joint_index: int, angle: float) -> None:
+        """Set a revolute joint of body ``name`` to ``angle`` (rad)."""
+        p.resetJointState(self.body(name), joint_index, angle, physicsClientId=self.client)
+
+    def step(self, n_substeps: int) -> None:
+        """Advance the physics by ``n_substeps`` time steps."""
+        for _ in range(n_substeps):
+            p.stepSimulation(physicsClientId=self.client)
+
+    def save_state(self) -> int:
+        """Snapshot of the whole physics state, for exact resets."""
+        return int(p.saveState(physicsClientId=self.client))
+
+    def restore_state(self, state_id: int) -> None:
+        """Return to a snapshot from :meth:`save_state`."""
+        p.restoreState(stateId=state_id, physicsClientId=self.client)
+
+    # ----- sensing ------------------------------------------------------------------------
+    def ray_test(self, starts: FloatArray, ends: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
+        """Batched ray casts: (N, 3) starts and ends -> hit fractions (N,) and body ids (N,).
+
+        A fraction of 1.0 with body id -1 means no hit.
+        """
+        n = len(starts)
+        fractions = np.ones(n)
+        ids = np.full(n, -1, dtype=np.int64)
+        batch = p.MAX_RAY_INTERSECTION_BATCH_SIZE
+        for lo in range(0, n, batch):
+            hits = p.rayTestBatch(
+                starts[lo:lo + batch].tolist(), ends[lo:lo + batch].tolist(),
+                physicsClientId=self.client,
+            )
+            for i, hit in enumerate(hits):
+                ids[lo + i] = hit[0]
+                fractions[lo + i] = hit[2] if hit[0] >= 0 else 1.0
+        return fractions, ids
+
+    def render(
+        self, *, width: int, height: int, view: Sequence[float], projection: Sequence[float],
+        lighting: Lighting,
+    ) -> tuple[NDArray[np.uint8], NDArray[np.int32]]:
+        """Tiny-renderer image (H, W, 3) uint8 RGB and (H, W) body-id labels (-1 = background)."""
+        _, _, rgba, _, seg = p.getCameraImage(
+            width, height, viewMatrix=list(view), projectionMatrix=list(projection),
+            renderer=p.ER_TINY_RENDERER, shadow=0,
+            lightDirection=list(lighting.direction), lightColor=list(lighting.colour),
+            lightAmbientCoeff=lighting.ambient, lightDiffuseCoeff=lighting.diffuse,
+            lightSpecularCoeff=lighting.specular, physicsClientId=self.client,
+        )
+        rgb = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3]
+        labels = np.asarray(seg, dtype=np.int32).reshape(height, width)
+        return np.ascontiguousarray(rgb), labels
+
+    def close(self) -> None:
+        """Disconnect; safe to call more than once."""
+        if self._client is not None:
+            p.disconnect(physicsClientId=self._client)
+            self._client = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class LinkSpec:
+    """A revolute link of an articulated body: parent link index (0 = base), joint offset and axis."""
+
+    parent: int
+    offset: tuple[float, float, float]
+    axis: tuple[float, float, float]
+    parts: tuple[VisualPart, ...] = ()
