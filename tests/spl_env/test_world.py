@@ -1,0 +1,126 @@
+"""The PyBullet world, scene and robot against known geometry and the Nao's limits."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+
+import numpy as np
+import pytest
+
+from perception.geometry import project_points
+from spl_env.sensors.camera import Camera, CameraConfig, EpisodeLighting
+from spl_env.sim.robot import NaoRobot, RobotConfig
+from spl_env.sim.scene import SceneBodies, SceneConfig, build_scene
+from spl_env.sim.world import MAX_PARTS_PER_BODY, BulletWorld, VisualPart
+
+SCENE = SceneConfig()
+
+
+@pytest.fixture(scope="module")
+def scene() -> Iterator[tuple[BulletWorld, SceneBodies, NaoRobot]]:
+    world = BulletWorld(time_step_s=0.01)
+    bodies = build_scene(world, SCENE, np.random.default_rng(0))
+    robot = NaoRobot(world, "self", team=0, config=RobotConfig())
+    yield world, bodies, robot
+    world.close()
+
+
+def test_camera_projection_matches_rendered_labels(scene) -> None:
+    world, bodies, robot = scene
+    poles = SCENE.poles.positions(SCENE.dimensions)
+    geometry = SCENE.poles.geometry
+    robot.place(np.array([-1.0, 0.5, math.pi / 2]), head=np.array([0.3, 0.1]))
+    camera = Camera(CameraConfig(noise_std=0.0))
+    position, rotation = robot.camera_pose_world()
+    _, labels = camera.render(world, position, rotation, EpisodeLighting.default(),
+                              np.random.default_rng(0))
+    m = camera.config.model
+    mask = labels == world.body(bodies.poles[0])
+    rows, cols = np.nonzero(mask)
+    assert mask.sum() > 100, "pole 0 should be in view"
+    ends = np.array([[*poles[0], 0.0], [*poles[0], geometry.top_m]])
+    uv, front = project_points((ends - position) @ rotation, m.fx, m.fy, m.cx, m.cy)
+    assert front.all()
+    # rows: the pole's base and top project onto the label's lower and upper edges
+    assert uv[0, 1] == pytest.approx(rows.max() + 1, abs=1.5)
+    assert uv[1, 1] == pytest.approx(rows.min(), abs=1.5)
+    # columns: the axis lies inside the label, and one row of it is about 2 r f / depth wide
+    assert cols.min() < uv[:, 0].mean() < cols.max() + 1
+    middle = np.array([*poles[0], geometry.top_m / 2])
+    [(u_mid, v_mid)], _ = project_points(((middle - position) @ rotation)[None, :], m.fx, m.fy, m.cx, m.cy)
+    depth = float((middle - position) @ rotation[:, 0])
+    row_cols = cols[rows == int(v_mid)]
+    assert row_cols.min() <= u_mid <= row_cols.max() + 1
+    assert row_cols.max() + 1 - row_cols.min() == pytest.approx(2 * geometry.radius_m * m.fx / depth, abs=1.5)
+
+
+def test_ray_test_hits_pole_at_its_surface(scene) -> None:
+    world, bodies, _ = scene
+    pole = SCENE.poles.positions(SCENE.dimensions)[1]
+    start = np.array([[pole[0], pole[1] - 2.0, 0.3]])
+    end = np.array([[pole[0], pole[1] + 2.0, 0.3]])
+    fractions, ids = world.ray_test(start, end)
+    assert ids[0] == world.body(bodies.poles[1])
+    assert 4.0 * fractions[0] == pytest.approx(2.0 - SCENE.poles.geometry.radius_m, abs=1e-3)
+
+
+def test_walk_respects_speed_and_acceleration_limits(scene) -> None:
+    _, _, robot = scene
+    cfg = robot.config
+    robot.place(np.zeros(3))
+    first = robot.walk_step(np.array([1.0, 0.0, 0.0]), 0.1)
+    assert first[0] == pytest.approx(cfg.max_accel[0] * 0.1 * 0.1)  # v after one step times dt
+    for _ in range(50):
+        robot.walk_step(np.array([1.0, -1.0, 5.0]), 0.1)
+    np.testing.assert_allclose(robot.velocity, [cfg.max_speed[0], -cfg.max_speed[1], cfg.max_speed[2]])
+
+
+def test_walk_increment_is_exact_constant_twist_arc(scene) -> None:
+    _, _, robot = scene
+    robot.place(np.zeros(3))
+    robot.velocity = np.array([0.2, 0.0, 0.5])
+    inc = robot.walk_step(np.array([0.2, 0.0, 0.5]), 0.1)
+    # a circle of radius v / omega turned through omega * dt
+    r, a = 0.2 / 0.5, 0.05
+    np.testing.assert_allclose(inc, [r * math.sin(a), r * (1 - math.cos(a)), a], atol=1e-12)
+
+
+def test_head_limits_and_speed(scene) -> None:
+    _, _, robot = scene
+    cfg = robot.config
+    robot.place(np.zeros(3))
+    robot.move_head(np.array([3.0, 3.0]), 0.1)
+    np.testing.assert_allclose(robot.head, [cfg.head_speed_rps * 0.1] * 2)
+    for _ in range(30):
+        robot.move_head(np.array([3.0, 3.0]), 0.1)
+    np.testing.assert_allclose(robot.head, [cfg.head_yaw_limit_rad, cfg.head_pitch_max_rad])
+    assert math.degrees(cfg.head_yaw_limit_rad) == pytest.approx(119.5)
+
+
+def test_standing_top_camera_height(scene) -> None:
+    _, _, robot = scene
+    robot.place(np.zeros(3))
+    position, rotation = robot.camera_pose_world()
+    assert position[2] == pytest.approx(0.52, abs=0.01)  # ARCHITECTURE §7: about 0.52 m
+    assert rotation[:, 0][2] == pytest.approx(-math.sin(robot.config.camera_tilt_rad))
+
+
+def test_too_many_parts_rejected() -> None:
+    world = BulletWorld(time_step_s=0.01)
+    part = VisualPart(shape="box", size=(0.1, 0.1, 0.1), position=(0, 0, 0), rgba=(1, 1, 1, 1))
+    with pytest.raises(ValueError, match="parts"):
+        world.add_static("many", [part] * (MAX_PARTS_PER_BODY + 1))
+    world.close()
+    world.close()  # twice is fine
+    with pytest.raises(RuntimeError, match="closed"):
+        _ = world.client
+
+
+def test_bad_configs_rejected() -> None:
+    with pytest.raises(ValueError, match="max_speed"):
+        RobotConfig(max_speed=(0.2, 0.1))
+    with pytest.raises(ValueError, match="board_height_m"):
+        SceneConfig(board_height_m=-1.0)
+    with pytest.raises(ValueError, match="time_step_s"):
+        BulletWorld(time_step_s=0.0)
