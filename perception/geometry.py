@@ -97,9 +97,7 @@ def camera_rotation(
     return rot_y(body_pitch) @ rot_x(body_roll) @ rot_z(head_yaw) @ rot_y(head_pitch)
 
 
-def pixel_rays(
-    pixels: ArrayLike, fx: float, fy: float, cx: float, cy: float
-) -> FloatArray:
+def pixel_rays(pixels: ArrayLike, fx: float, fy: float, cx: float, cy: float) -> FloatArray:
     """Unit rays (N, 3) in the camera frame through (N, 2) pixel coordinates ``(u, v)``."""
     uv = np.atleast_2d(np.asarray(pixels, dtype=np.float64))
     d = np.column_stack([np.ones(len(uv)), (cx - uv[:, 0]) / fx, (cy - uv[:, 1]) / fy])

@@ -151,7 +151,8 @@ class SensorFrame:
 
     - ``odometry_delta`` (3,): motion since the last frame in the previous odometry pose's frame;
     - ``image``: (H, W, 3) uint8 RGB or ``None`` when no frame was taken;
-    - ``sonar``: (3, E) echo distances (m) of the left/middle/right sectors, NaN-padded, or ``None``;
+    - ``sonar``: (3, E) echo distances (m) of the left/middle/right sectors, NaN-padded, or
+      ``None``;
     - ``laser``: (B,) ranges (m) with NaN for no return, or ``None``.
     """
 

@@ -8,7 +8,7 @@ is ``line_width_m`` wide.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -102,13 +102,6 @@ class FieldDimensions:
         y = 0.5 * self.goal_inner_width_m + 0.5 * self.goal_post_diameter_m
         return np.array([[-x, -y], [-x, y], [x, -y], [x, y]])
 
-    def inside_field(self, xy: FloatArray, margin_m: float = 0.0) -> bool:
-        """Whether point ``xy`` (2,) lies inside the outer lines shrunk by ``margin_m``."""
-        return bool(
-            abs(xy[0]) <= self.half_length_m - margin_m
-            and abs(xy[1]) <= self.half_width_m - margin_m
-        )
-
 
 @dataclass(frozen=True, kw_only=True)
 class PoleLayout:
@@ -121,7 +114,7 @@ class PoleLayout:
 
     x_positions_m: tuple[float, float, float] = (-3.0, 0.0, 3.0)
     offset_outside_m: float = 0.35  # beyond the touch line
-    geometry: PoleGeometry = PoleGeometry()
+    geometry: PoleGeometry = field(default_factory=PoleGeometry)
 
     def __post_init__(self) -> None:
         if len(self.x_positions_m) != 3:
@@ -141,9 +134,9 @@ class PoleLayout:
         right = [PoleCode(landmark_id=3 + i, top=c, bottom="pink") for i, c in enumerate(colours)]
         return tuple(left + right)
 
-    def positions(self, field: FieldDimensions) -> FloatArray:
+    def positions(self, dims: FieldDimensions) -> FloatArray:
         """(6, 2) field positions of the poles in id order."""
-        y = field.half_width_m + self.offset_outside_m
+        y = dims.half_width_m + self.offset_outside_m
         xs = np.array(self.x_positions_m, dtype=np.float64)
         return np.concatenate(
             [np.column_stack([xs, np.full(3, y)]), np.column_stack([xs, np.full(3, -y)])]

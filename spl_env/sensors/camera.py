@@ -28,18 +28,26 @@ class LightingRandomisation:
     colour_jitter: float = 0.12  # per-channel light colour in [1 - j, 1]
     exposure: tuple[float, float] = (0.75, 1.25)  # image gain
     window_probability: float = 0.5  # chance that one side of the field has a bright window
-    window_strength: tuple[float, float] = (0.3, 0.7)  # added brightness (fraction of 255) facing it
+    window_strength: tuple[float, float] = (
+        0.3,
+        0.7,
+    )  # added brightness (fraction of 255) facing it
 
     def __post_init__(self) -> None:
         for name in ("ambient", "diffuse", "exposure", "window_strength"):
             lo, hi = getattr(self, name)
             if not (math.isfinite(lo) and math.isfinite(hi) and 0 <= lo <= hi):
-                raise ValueError(f"LightingRandomisation.{name} must be 0 <= lo <= hi, got {(lo, hi)}")
+                raise ValueError(
+                    f"LightingRandomisation.{name} must be 0 <= lo <= hi, got {(lo, hi)}"
+                )
         if not 0 <= self.colour_jitter < 1:
-            raise ValueError(f"LightingRandomisation.colour_jitter must be in [0, 1), got {self.colour_jitter}")
+            raise ValueError(
+                f"LightingRandomisation.colour_jitter must be in [0, 1), got {self.colour_jitter}"
+            )
         if not 0 <= self.window_probability <= 1:
             raise ValueError(
-                f"LightingRandomisation.window_probability must be in [0, 1], got {self.window_probability}"
+                "LightingRandomisation.window_probability must be in [0, 1], "
+                f"got {self.window_probability}"
             )
 
 
@@ -57,9 +65,13 @@ class CameraConfig:
 
     def __post_init__(self) -> None:
         if not (0 < self.near_m < self.far_m) or not math.isfinite(self.far_m):
-            raise ValueError(f"CameraConfig needs 0 < near_m < far_m, got {self.near_m}, {self.far_m}")
+            raise ValueError(
+                f"CameraConfig needs 0 < near_m < far_m, got {self.near_m}, {self.far_m}"
+            )
         if not (math.isfinite(self.noise_std) and self.noise_std >= 0):
-            raise ValueError(f"CameraConfig.noise_std must be finite and >= 0, got {self.noise_std}")
+            raise ValueError(
+                f"CameraConfig.noise_std must be finite and >= 0, got {self.noise_std}"
+            )
         if not (math.isfinite(self.exposure_time_s) and self.exposure_time_s >= 0):
             raise ValueError(
                 f"CameraConfig.exposure_time_s must be finite and >= 0, got {self.exposure_time_s}"
@@ -81,24 +93,32 @@ class EpisodeLighting:
     @staticmethod
     def default() -> EpisodeLighting:
         """Even lighting, no window."""
-        return EpisodeLighting(lighting=Lighting(), exposure=1.0, window_direction=None,
-                               window_strength=0.0)
+        return EpisodeLighting(
+            lighting=Lighting(), exposure=1.0, window_direction=None, window_strength=0.0
+        )
 
     @staticmethod
     def sample(r: LightingRandomisation, rng: np.random.Generator) -> EpisodeLighting:
         """Draw an episode's lighting from the ranges in ``r``."""
         azimuth = rng.uniform(0, 2 * math.pi)
         elevation = rng.uniform(math.radians(35), math.radians(85))
-        direction = (math.cos(elevation) * math.cos(azimuth),
-                     math.cos(elevation) * math.sin(azimuth), math.sin(elevation))
+        direction = (
+            math.cos(elevation) * math.cos(azimuth),
+            math.cos(elevation) * math.sin(azimuth),
+            math.sin(elevation),
+        )
         colour = tuple(float(c) for c in rng.uniform(1 - r.colour_jitter, 1.0, size=3))
-        lighting = Lighting(direction=direction, colour=(colour[0], colour[1], colour[2]),
-                            ambient=float(rng.uniform(*r.ambient)),
-                            diffuse=float(rng.uniform(*r.diffuse)))
+        lighting = Lighting(
+            direction=direction,
+            colour=(colour[0], colour[1], colour[2]),
+            ambient=float(rng.uniform(*r.ambient)),
+            diffuse=float(rng.uniform(*r.diffuse)),
+        )
         window = rng.uniform() < r.window_probability
         side = rng.uniform(0, 2 * math.pi)
         return EpisodeLighting(
-            lighting=lighting, exposure=float(rng.uniform(*r.exposure)),
+            lighting=lighting,
+            exposure=float(rng.uniform(*r.exposure)),
             window_direction=np.array([math.cos(side), math.sin(side)]) if window else None,
             window_strength=float(rng.uniform(*r.window_strength)) if window else 0.0,
         )
@@ -113,8 +133,13 @@ class Camera:
         self._projection = _projection_matrix(m, config.near_m, config.far_m)
 
     def render(
-        self, world: BulletWorld, position: FloatArray, rotation: FloatArray,
-        lighting: EpisodeLighting, rng: np.random.Generator, yaw_rate_rps: float = 0.0,
+        self,
+        world: BulletWorld,
+        position: FloatArray,
+        rotation: FloatArray,
+        lighting: EpisodeLighting,
+        rng: np.random.Generator,
+        yaw_rate_rps: float = 0.0,
     ) -> tuple[NDArray[np.uint8], NDArray[np.int32]]:
         """Image (H, W, 3) uint8 RGB and (H, W) body-id labels seen from the camera pose.
 
@@ -124,23 +149,34 @@ class Camera:
         m = self.config.model
         forward, up = rotation[:, 0], rotation[:, 2]
         view = _view_matrix(position, forward, up)
-        rgb, labels = world.render(width=m.width, height=m.height, view=view,
-                                   projection=self._projection, lighting=lighting.lighting)
+        rgb, labels = world.render(
+            width=m.width,
+            height=m.height,
+            view=view,
+            projection=self._projection,
+            lighting=lighting.lighting,
+        )
         image = rgb.astype(np.float32) * lighting.exposure
         if lighting.window_direction is not None:
-            image = _window_glare(image, forward, lighting.window_direction,
-                                  lighting.window_strength, m)
+            image = _window_glare(
+                image, forward, lighting.window_direction, lighting.window_strength, m
+            )
         blur_px = abs(yaw_rate_rps) * self.config.exposure_time_s * m.fx
         if blur_px >= 1.5:
-            k = int(round(blur_px))
-            image = cv2.blur(image, (k, 1))
+            k = round(blur_px)
+            image = np.asarray(cv2.blur(image, (k, 1)), dtype=np.float32)
         if self.config.noise_std > 0:
             image += rng.normal(0.0, self.config.noise_std, size=image.shape).astype(np.float32)
         return np.clip(image, 0, 255).astype(np.uint8), labels
 
 
-def _window_glare(image: NDArray[np.float32], forward: FloatArray, window_direction: FloatArray,
-                  strength: float, model: CameraModel) -> NDArray[np.float32]:
+def _window_glare(
+    image: NDArray[np.float32],
+    forward: FloatArray,
+    window_direction: FloatArray,
+    strength: float,
+    model: CameraModel,
+) -> NDArray[np.float32]:
     """Wash out the image when looking towards the window, brighter on the window's side."""
     heading = forward[:2] / max(float(np.linalg.norm(forward[:2])), 1e-9)
     facing = float(heading @ window_direction)

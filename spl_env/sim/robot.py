@@ -47,8 +47,13 @@ class RobotConfig:
             values = getattr(self, name)
             if len(values) != 3 or not all(math.isfinite(v) and v > 0 for v in values):
                 raise ValueError(f"RobotConfig.{name} must be 3 finite values > 0, got {values}")
-        for name in ("body_radius_m", "head_yaw_limit_rad", "head_speed_rps",
-                     "head_yaw_joint_height_m", "gait_frequency_hz"):
+        for name in (
+            "body_radius_m",
+            "head_yaw_limit_rad",
+            "head_speed_rps",
+            "head_yaw_joint_height_m",
+            "gait_frequency_hz",
+        ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"RobotConfig.{name} must be finite and > 0, got {value}")
@@ -69,10 +74,22 @@ def _body_parts(team: int) -> list[VisualPart]:
         VisualPart(shape="box", size=(0.045, 0.035, 0.13), position=(0.0, y, 0.13), rgba=NAO_GREY)
         for y in (-0.05, 0.05)
     ]
-    parts.append(VisualPart(shape="box", size=(0.055, 0.085, 0.02), position=(0.0, 0.0, 0.28),
-                            rgba=TEAM_WAISTBAND_RGBA[team]))
-    parts.append(VisualPart(shape="box", size=(0.05, 0.08, 0.07), position=(0.0, 0.0, 0.37),
-                            rgba=TEAM_JERSEY_RGBA[team]))
+    parts.append(
+        VisualPart(
+            shape="box",
+            size=(0.055, 0.085, 0.02),
+            position=(0.0, 0.0, 0.28),
+            rgba=TEAM_WAISTBAND_RGBA[team],
+        )
+    )
+    parts.append(
+        VisualPart(
+            shape="box",
+            size=(0.05, 0.08, 0.07),
+            position=(0.0, 0.0, 0.37),
+            rgba=TEAM_JERSEY_RGBA[team],
+        )
+    )
     parts += [
         VisualPart(shape="box", size=(0.03, 0.025, 0.1), position=(0.0, y, 0.34), rgba=NAO_GREY)
         for y in (-0.11, 0.11)
@@ -90,23 +107,34 @@ class NaoRobot:
         self.name = name
         self.team = team
         self.config = config
-        head = VisualPart(shape="box", size=(0.05, 0.065, 0.06), position=(0.0, 0.0, 0.045),
-                          rgba=NAO_GREY)
-        world.add_articulated(name, _body_parts(team), [
-            LinkSpec(parent=0, offset=(0.0, 0.0, config.head_yaw_joint_height_m), axis=(0, 0, 1)),
-            LinkSpec(parent=1, offset=(0.0, 0.0, config.head_pitch_joint_offset_m), axis=(0, 1, 0),
-                     parts=(head,)),
-        ])
+        head = VisualPart(
+            shape="box", size=(0.05, 0.065, 0.06), position=(0.0, 0.0, 0.045), rgba=NAO_GREY
+        )
+        world.add_articulated(
+            name,
+            _body_parts(team),
+            [
+                LinkSpec(
+                    parent=0, offset=(0.0, 0.0, config.head_yaw_joint_height_m), axis=(0, 0, 1)
+                ),
+                LinkSpec(
+                    parent=1,
+                    offset=(0.0, 0.0, config.head_pitch_joint_offset_m),
+                    axis=(0, 1, 0),
+                    parts=(head,),
+                ),
+            ],
+        )
         self.pose = np.zeros(3)
         self.velocity = np.zeros(3)
         self.head = np.zeros(2)
         self.gait_phase = 0.0
 
-    def place(self, pose: FloatArray, head: FloatArray = np.zeros(2)) -> None:
+    def place(self, pose: FloatArray, head: FloatArray | None = None) -> None:
         """Put the robot standing still at ``pose`` (3,) with head angles (2,) (rad)."""
         self.pose = np.asarray(pose, dtype=np.float64).copy()
         self.velocity = np.zeros(3)
-        self.head = np.asarray(head, dtype=np.float64).copy()
+        self.head = np.zeros(2) if head is None else np.asarray(head, dtype=np.float64).copy()
         self.gait_phase = 0.0
         self.sync()
 
@@ -122,8 +150,9 @@ class NaoRobot:
         max_change = np.asarray(cfg.max_accel) * dt_s
         self.velocity = self.velocity + np.clip(target - self.velocity, -max_change, max_change)
         speed = float(np.max(np.abs(self.velocity) / np.asarray(cfg.max_speed)))
-        self.gait_phase = (self.gait_phase + 2 * math.pi * cfg.gait_frequency_hz * dt_s
-                           * (speed > 1e-3)) % (2 * math.pi)
+        self.gait_phase = (
+            self.gait_phase + 2 * math.pi * cfg.gait_frequency_hz * dt_s * (speed > 1e-3)
+        ) % (2 * math.pi)
         vx, vy, omega = self.velocity * dt_s
         if abs(omega) < 1e-9:
             return np.array([vx, vy, 0.0])
@@ -152,15 +181,18 @@ class NaoRobot:
         cfg = self.config
         speed = float(np.max(np.abs(self.velocity) / np.asarray(cfg.max_speed)))
         phase = self.gait_phase
-        return (cfg.sway_roll_rad * speed * math.sin(phase),
-                cfg.sway_pitch_rad * speed * math.sin(2 * phase),
-                cfg.sway_bob_m * speed * (math.cos(2 * phase) - 1) / 2)
+        return (
+            cfg.sway_roll_rad * speed * math.sin(phase),
+            cfg.sway_pitch_rad * speed * math.sin(2 * phase),
+            cfg.sway_bob_m * speed * (math.cos(2 * phase) - 1) / 2,
+        )
 
     def sync(self) -> None:
         """Push pose, sway and head joints into the physics world."""
         roll, pitch, bob = self.sway()
-        self.world.set_pose(self.name, (self.pose[0], self.pose[1], bob), self.pose[2],
-                            roll=roll, pitch=pitch)
+        self.world.set_pose(
+            self.name, (self.pose[0], self.pose[1], bob), self.pose[2], roll=roll, pitch=pitch
+        )
         self.world.set_joint(self.name, 0, float(self.head[0]))
         self.world.set_joint(self.name, 1, float(self.head[1]))
 
@@ -169,10 +201,16 @@ class NaoRobot:
         cfg = self.config
         head_rot = rot_z(self.head[0]) @ rot_y(self.head[1])
         neck = np.array([0.0, 0.0, cfg.head_yaw_joint_height_m])
-        pitch_joint = neck + rot_z(self.head[0]) @ np.array([0.0, 0.0, cfg.head_pitch_joint_offset_m])
+        pitch_joint = neck + rot_z(self.head[0]) @ np.array(
+            [0.0, 0.0, cfg.head_pitch_joint_offset_m]
+        )
         position = pitch_joint + head_rot @ np.asarray(cfg.camera_offset_m)
-        return CameraState(position=position, head_yaw=float(self.head[0]),
-                           head_pitch=float(self.head[1]), tilt=cfg.camera_tilt_rad)
+        return CameraState(
+            position=position,
+            head_yaw=float(self.head[0]),
+            head_pitch=float(self.head[1]),
+            tilt=cfg.camera_tilt_rad,
+        )
 
     def camera_pose_world(self) -> tuple[FloatArray, FloatArray]:
         """True camera position (3,) and rotation (3, 3) in the field frame, sway included."""
@@ -181,5 +219,6 @@ class NaoRobot:
         state = self.camera_state()
         position = np.array([self.pose[0], self.pose[1], bob]) + body @ state.position
         rotation = rot_z(self.pose[2]) @ camera_rotation(
-            state.head_yaw, state.head_pitch + state.tilt, body_roll=roll, body_pitch=pitch)
+            state.head_yaw, state.head_pitch + state.tilt, body_roll=roll, body_pitch=pitch
+        )
         return position, rotation

@@ -6,6 +6,7 @@ a ball, and boards with textured posters around the field for realistic clutter.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field
 from importlib import resources
@@ -47,14 +48,14 @@ class SceneConfig:
     ball_rolling_friction: float = 0.0015
 
     def __post_init__(self) -> None:
-        for name in ("board_distance_m", "board_height_m", "board_panel_width_m",
-                     "ball_mass_kg"):
+        for name in ("board_distance_m", "board_height_m", "board_panel_width_m", "ball_mass_kg"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"SceneConfig.{name} must be finite and > 0, got {value}")
         if not (0.0 <= self.ball_rolling_friction < 1.0):
             raise ValueError(
-                f"SceneConfig.ball_rolling_friction must be in [0, 1), got {self.ball_rolling_friction}"
+                "SceneConfig.ball_rolling_friction must be in [0, 1), "
+                f"got {self.ball_rolling_friction}"
             )
 
 
@@ -72,57 +73,85 @@ def build_scene(world: BulletWorld, config: SceneConfig, rng: np.random.Generato
     """Create every static body and the ball; ``rng`` picks the posters for the boards."""
     dims = config.dimensions
     carpet_l, carpet_w = dims.carpet_size_m
-    world.add_static("carpet", [VisualPart(
-        shape="box", size=(carpet_l / 2, carpet_w / 2, 0.01), position=(0.0, 0.0, -0.01),
-        rgba=CARPET_RGBA,
-    )])
+    world.add_static(
+        "carpet",
+        [
+            VisualPart(
+                shape="box",
+                size=(carpet_l / 2, carpet_w / 2, 0.01),
+                position=(0.0, 0.0, -0.01),
+                rgba=CARPET_RGBA,
+            )
+        ],
+    )
     lines = _line_parts(dims)
     for k in range(0, len(lines), MAX_PARTS_PER_BODY):
-        world.add_static(f"field_lines_{k // MAX_PARTS_PER_BODY}",
-                         lines[k:k + MAX_PARTS_PER_BODY], collide=False)
+        world.add_static(
+            f"field_lines_{k // MAX_PARTS_PER_BODY}",
+            lines[k : k + MAX_PARTS_PER_BODY],
+            collide=False,
+        )
     posts = _add_goals(world, dims)
     poles: dict[int, str] = {}
     if config.poles_enabled:
         positions = config.poles.positions(dims)
         for code, xy in zip(config.poles.codes(), positions, strict=True):
             name = f"pole_{code.landmark_id}"
-            world.add_static(name, _pole_parts(code, config.poles.geometry),
-                             base_position=(xy[0], xy[1], 0.0))
+            world.add_static(
+                name, _pole_parts(code, config.poles.geometry), base_position=(xy[0], xy[1], 0.0)
+            )
             poles[code.landmark_id] = name
     if config.boards_enabled:
         _add_boards(world, config, rng)
     radius = dims.ball_diameter_m / 2
     world.add_sphere(
-        "ball", radius_m=radius, mass_kg=config.ball_mass_kg, position=(0.0, 0.0, radius),
-        rgba=BALL_RGBA, rolling_friction=config.ball_rolling_friction, restitution=0.3,
+        "ball",
+        radius_m=radius,
+        mass_kg=config.ball_mass_kg,
+        position=(0.0, 0.0, radius),
+        rgba=BALL_RGBA,
+        rolling_friction=config.ball_rolling_friction,
+        restitution=0.3,
     )
-    return SceneBodies(poles=poles, goal_posts=posts, ball="ball",
-                       static_obstacles=(*posts, *poles.values()))
+    return SceneBodies(
+        poles=poles, goal_posts=posts, ball="ball", static_obstacles=(*posts, *poles.values())
+    )
 
 
 def _flat_box(x0: float, y0: float, x1: float, y1: float, width: float) -> VisualPart:
     """A painted stripe from (x0, y0) to (x1, y1), ``width`` wide, lying on the carpet."""
     length = math.hypot(x1 - x0, y1 - y0) + width
     return VisualPart(
-        shape="box", size=(length / 2, width / 2, LINE_THICKNESS_M / 2),
+        shape="box",
+        size=(length / 2, width / 2, LINE_THICKNESS_M / 2),
         position=((x0 + x1) / 2, (y0 + y1) / 2, LINE_THICKNESS_M / 2),
-        rgba=LINE_RGBA, yaw=math.atan2(y1 - y0, x1 - x0),
+        rgba=LINE_RGBA,
+        yaw=math.atan2(y1 - y0, x1 - x0),
     )
 
 
 def _line_parts(dims: FieldDimensions, circle_segments: int = 32) -> list[VisualPart]:
     """All painted markings: straight lines, centre circle, centre mark and penalty marks."""
     w = dims.line_width_m
-    parts = [_flat_box(*seg, width=w) for seg in dims.line_segments()]
+    parts = [_flat_box(x0, y0, x1, y1, width=w) for x0, y0, x1, y1 in dims.line_segments()]
     r = dims.centre_circle_diameter_m / 2
     angles = np.linspace(0.0, 2 * math.pi, circle_segments + 1)
-    for a0, a1 in zip(angles[:-1], angles[1:], strict=True):
-        parts.append(_flat_box(r * math.cos(a0), r * math.sin(a0),
-                               r * math.cos(a1), r * math.sin(a1), width=w))
+    for a0, a1 in itertools.pairwise(angles):
+        parts.append(
+            _flat_box(
+                r * math.cos(a0), r * math.sin(a0), r * math.cos(a1), r * math.sin(a1), width=w
+            )
+        )
     mark = dims.penalty_mark_diameter_m / 2
     for x, y in (*dims.penalty_marks(), (0.0, 0.0)):
-        parts.append(VisualPart(shape="box", size=(mark, mark, LINE_THICKNESS_M / 2),
-                                position=(x, y, LINE_THICKNESS_M / 2), rgba=LINE_RGBA))
+        parts.append(
+            VisualPart(
+                shape="box",
+                size=(mark, mark, LINE_THICKNESS_M / 2),
+                position=(x, y, LINE_THICKNESS_M / 2),
+                rgba=LINE_RGBA,
+            )
+        )
     return parts
 
 
@@ -133,22 +162,42 @@ def _add_goals(world: BulletWorld, dims: FieldDimensions) -> tuple[str, ...]:
     names = []
     for i, (x, y) in enumerate(dims.goal_posts()):
         name = f"goal_post_{i}"
-        world.add_static(name, [VisualPart(shape="cylinder", size=(r, h), position=(0.0, 0.0, h / 2),
-                                           rgba=GOAL_RGBA)], base_position=(x, y, 0.0))
+        world.add_static(
+            name,
+            [VisualPart(shape="cylinder", size=(r, h), position=(0.0, 0.0, h / 2), rgba=GOAL_RGBA)],
+            base_position=(x, y, 0.0),
+        )
         names.append(name)
     for side in (-1.0, 1.0):
         x_post = side * (dims.half_length_m + r)
         x_back = side * (dims.half_length_m + dims.goal_depth_m)
         half_w = dims.goal_inner_width_m / 2 + 2 * r
-        world.add_static(f"goal_frame_{int(side > 0)}", [
-            VisualPart(shape="box", size=(r, half_w, r), position=(x_post, 0.0, h - r), rgba=GOAL_RGBA),
-            VisualPart(shape="box", size=(0.01, half_w, h / 2), position=(x_back, 0.0, h / 2),
-                       rgba=NET_RGBA),
-            VisualPart(shape="box", size=(dims.goal_depth_m / 2, 0.01, h / 2),
-                       position=((x_post + x_back) / 2, half_w, h / 2), rgba=NET_RGBA),
-            VisualPart(shape="box", size=(dims.goal_depth_m / 2, 0.01, h / 2),
-                       position=((x_post + x_back) / 2, -half_w, h / 2), rgba=NET_RGBA),
-        ])
+        world.add_static(
+            f"goal_frame_{int(side > 0)}",
+            [
+                VisualPart(
+                    shape="box", size=(r, half_w, r), position=(x_post, 0.0, h - r), rgba=GOAL_RGBA
+                ),
+                VisualPart(
+                    shape="box",
+                    size=(0.01, half_w, h / 2),
+                    position=(x_back, 0.0, h / 2),
+                    rgba=NET_RGBA,
+                ),
+                VisualPart(
+                    shape="box",
+                    size=(dims.goal_depth_m / 2, 0.01, h / 2),
+                    position=((x_post + x_back) / 2, half_w, h / 2),
+                    rgba=NET_RGBA,
+                ),
+                VisualPart(
+                    shape="box",
+                    size=(dims.goal_depth_m / 2, 0.01, h / 2),
+                    position=((x_post + x_back) / 2, -half_w, h / 2),
+                    rgba=NET_RGBA,
+                ),
+            ],
+        )
     return tuple(names)
 
 
@@ -157,10 +206,18 @@ def _pole_parts(code: PoleCode, geometry: PoleGeometry) -> list[VisualPart]:
     r, base, band = geometry.radius_m, geometry.base_top_m, geometry.band_height_m
     return [
         VisualPart(shape="cylinder", size=(r, base), position=(0.0, 0.0, base / 2), rgba=LINE_RGBA),
-        VisualPart(shape="cylinder", size=(r, band), position=(0.0, 0.0, geometry.lower_centre_m),
-                   rgba=POLE_BAND_RGBA[code.bottom]),
-        VisualPart(shape="cylinder", size=(r, band), position=(0.0, 0.0, geometry.upper_centre_m),
-                   rgba=POLE_BAND_RGBA[code.top]),
+        VisualPart(
+            shape="cylinder",
+            size=(r, band),
+            position=(0.0, 0.0, geometry.lower_centre_m),
+            rgba=POLE_BAND_RGBA[code.bottom],
+        ),
+        VisualPart(
+            shape="cylinder",
+            size=(r, band),
+            position=(0.0, 0.0, geometry.upper_centre_m),
+            rgba=POLE_BAND_RGBA[code.top],
+        ),
     ]
 
 
@@ -172,7 +229,12 @@ def _add_boards(world: BulletWorld, config: SceneConfig, rng: np.random.Generato
     h = config.board_height_m
     poster_dir = resources.files("spl_env") / "assets" / "posters"
     panel = 0
-    for along_x, fixed, span in ((True, hy, hx), (True, -hy, hx), (False, hx, hy), (False, -hx, hy)):
+    for along_x, fixed, span in (
+        (True, hy, hx),
+        (True, -hy, hx),
+        (False, hx, hy),
+        (False, -hx, hy),
+    ):
         n = max(1, round(2 * span / config.board_panel_width_m))
         width = 2 * span / n
         for k in range(n):
@@ -180,8 +242,11 @@ def _add_boards(world: BulletWorld, config: SceneConfig, rng: np.random.Generato
             x, y = (centre, fixed) if along_x else (fixed, centre)
             size = (width / 2, 0.02, h / 2) if along_x else (0.02, width / 2, h / 2)
             name = f"board_{panel}"
-            world.add_static(name, [VisualPart(shape="box", size=size, position=(0.0, 0.0, h / 2),
-                                               rgba=BOARD_RGBA)], base_position=(x, y, 0.0))
+            world.add_static(
+                name,
+                [VisualPart(shape="box", size=size, position=(0.0, 0.0, h / 2), rgba=BOARD_RGBA)],
+                base_position=(x, y, 0.0),
+            )
             poster = POSTER_FILES[int(rng.integers(len(POSTER_FILES)))]
             world.set_texture(name, str(poster_dir / poster))
             panel += 1

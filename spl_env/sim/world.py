@@ -36,7 +36,7 @@ class VisualPart:
 
 @dataclass(frozen=True, kw_only=True)
 class Lighting:
-    """Tiny-renderer lighting of one frame: direction (3,) towards the light, RGB colour, coefficients."""
+    """Tiny-renderer lighting of a frame: direction (3,) towards the light, colour, coefficients."""
 
     direction: tuple[float, float, float] = (0.3, 0.2, 1.0)
     colour: tuple[float, float, float] = (1.0, 1.0, 1.0)
@@ -87,21 +87,35 @@ class BulletWorld:
         return tuple(self._bodies)
 
     def add_static(
-        self, name: str, parts: Sequence[VisualPart], *, collide: bool = True,
+        self,
+        name: str,
+        parts: Sequence[VisualPart],
+        *,
+        collide: bool = True,
         base_position: Sequence[float] = (0.0, 0.0, 0.0),
     ) -> int:
         """A fixed compound body of primitives; with ``collide`` each part also collides."""
         vis = self._shape_array(parts, visual=True)
         col = self._shape_array(parts, visual=False) if collide else -1
         body_id = p.createMultiBody(
-            baseMass=0.0, baseCollisionShapeIndex=col, baseVisualShapeIndex=vis,
-            basePosition=list(base_position), physicsClientId=self.client,
+            baseMass=0.0,
+            baseCollisionShapeIndex=col,
+            baseVisualShapeIndex=vis,
+            basePosition=list(base_position),
+            physicsClientId=self.client,
         )
         return self._register(name, body_id)
 
     def add_sphere(
-        self, name: str, *, radius_m: float, mass_kg: float, position: Sequence[float],
-        rgba: Sequence[float], rolling_friction: float, restitution: float,
+        self,
+        name: str,
+        *,
+        radius_m: float,
+        mass_kg: float,
+        position: Sequence[float],
+        rgba: Sequence[float],
+        rolling_friction: float,
+        restitution: float,
     ) -> int:
         """A dynamic sphere (the ball)."""
         col = p.createCollisionShape(p.GEOM_SPHERE, radius=radius_m, physicsClientId=self.client)
@@ -109,26 +123,41 @@ class BulletWorld:
             p.GEOM_SPHERE, radius=radius_m, rgbaColor=list(rgba), physicsClientId=self.client
         )
         body_id = p.createMultiBody(
-            baseMass=mass_kg, baseCollisionShapeIndex=col, baseVisualShapeIndex=vis,
-            basePosition=list(position), physicsClientId=self.client,
+            baseMass=mass_kg,
+            baseCollisionShapeIndex=col,
+            baseVisualShapeIndex=vis,
+            basePosition=list(position),
+            physicsClientId=self.client,
         )
         p.changeDynamics(
-            body_id, -1, rollingFriction=rolling_friction, spinningFriction=rolling_friction,
-            restitution=restitution, lateralFriction=0.6, linearDamping=0.0, angularDamping=0.0,
+            body_id,
+            -1,
+            rollingFriction=rolling_friction,
+            spinningFriction=rolling_friction,
+            restitution=restitution,
+            lateralFriction=0.6,
+            linearDamping=0.0,
+            angularDamping=0.0,
             physicsClientId=self.client,
         )
         return self._register(name, body_id)
 
     def add_articulated(
-        self, name: str, base_parts: Sequence[VisualPart], links: Sequence[LinkSpec],
+        self,
+        name: str,
+        base_parts: Sequence[VisualPart],
+        links: Sequence[LinkSpec],
     ) -> int:
         """A kinematic (mass 0) body with revolute links, e.g. a robot with a head."""
         vis = self._shape_array(base_parts, visual=True)
         col = self._shape_array(base_parts, visual=False)
-        link_vis = [self._shape_array(link.parts, visual=True) if link.parts else -1
-                    for link in links]
+        link_vis = [
+            self._shape_array(link.parts, visual=True) if link.parts else -1 for link in links
+        ]
         body_id = p.createMultiBody(
-            baseMass=0.0, baseCollisionShapeIndex=col, baseVisualShapeIndex=vis,
+            baseMass=0.0,
+            baseCollisionShapeIndex=col,
+            baseVisualShapeIndex=vis,
             basePosition=[0.0, 0.0, 0.0],
             linkMasses=[0.0] * len(links),
             linkCollisionShapeIndices=[-1] * len(links),
@@ -152,26 +181,41 @@ class BulletWorld:
         kinds = {"box": p.GEOM_BOX, "cylinder": p.GEOM_CYLINDER, "sphere": p.GEOM_SPHERE}
         for part in parts:
             if part.shape not in kinds:
-                raise ValueError(f"VisualPart.shape must be one of {sorted(kinds)}, got {part.shape!r}")
+                raise ValueError(
+                    f"VisualPart.shape must be one of {sorted(kinds)}, got {part.shape!r}"
+                )
         shape_types = [kinds[part.shape] for part in parts]
-        half_extents = [list(part.size) if part.shape == "box" else [0.0, 0.0, 0.0]
-                        for part in parts]
+        half_extents = [
+            list(part.size) if part.shape == "box" else [0.0, 0.0, 0.0] for part in parts
+        ]
         radii = [part.size[0] if part.shape != "box" else 0.0 for part in parts]
         lengths = [part.size[1] if part.shape == "cylinder" else 0.0 for part in parts]
         positions = [list(part.position) for part in parts]
         orientations = [list(p.getQuaternionFromEuler([0.0, 0.0, part.yaw])) for part in parts]
         if visual:
-            return int(p.createVisualShapeArray(
-                shapeTypes=shape_types, halfExtents=half_extents, radii=radii, lengths=lengths,
-                rgbaColors=[list(part.rgba) for part in parts],
-                visualFramePositions=positions, visualFrameOrientations=orientations,
+            return int(
+                p.createVisualShapeArray(
+                    shapeTypes=shape_types,
+                    halfExtents=half_extents,
+                    radii=radii,
+                    lengths=lengths,
+                    rgbaColors=[list(part.rgba) for part in parts],
+                    visualFramePositions=positions,
+                    visualFrameOrientations=orientations,
+                    physicsClientId=self.client,
+                )
+            )
+        return int(
+            p.createCollisionShapeArray(
+                shapeTypes=shape_types,
+                halfExtents=half_extents,
+                radii=radii,
+                lengths=lengths,
+                collisionFramePositions=positions,
+                collisionFrameOrientations=orientations,
                 physicsClientId=self.client,
-            ))
-        return int(p.createCollisionShapeArray(
-            shapeTypes=shape_types, halfExtents=half_extents, radii=radii, lengths=lengths,
-            collisionFramePositions=positions, collisionFrameOrientations=orientations,
-            physicsClientId=self.client,
-        ))
+            )
+        )
 
     def set_texture(self, name: str, texture_path: str) -> None:
         """Paint ``texture_path`` (PNG) on body ``name``'s base visual."""
@@ -179,8 +223,14 @@ class BulletWorld:
         p.changeVisualShape(self.body(name), -1, textureUniqueId=tex, physicsClientId=self.client)
 
     # ----- state --------------------------------------------------------------------------
-    def set_pose(self, name: str, position: Sequence[float], yaw: float,
-                 roll: float = 0.0, pitch: float = 0.0) -> None:
+    def set_pose(
+        self,
+        name: str,
+        position: Sequence[float],
+        yaw: float,
+        roll: float = 0.0,
+        pitch: float = 0.0,
+    ) -> None:
         """Teleport body ``name`` to ``position`` (3,) with the given Euler angles (rad)."""
         quat = p.getQuaternionFromEuler([roll, pitch, yaw])
         p.resetBasePositionAndOrientation(
@@ -197,11 +247,13 @@ class BulletWorld:
         lin, _ = p.getBaseVelocity(self.body(name), physicsClientId=self.client)
         return np.asarray(lin, dtype=np.float64)
 
-    def set_velocity(self, name: str, linear: Sequence[float],
-                     angular: Sequence[float] = (0.0, 0.0, 0.0)) -> None:
+    def set_velocity(
+        self, name: str, linear: Sequence[float], angular: Sequence[float] = (0.0, 0.0, 0.0)
+    ) -> None:
         """Set body ``name``'s linear (m/s) and angular (rad/s) velocity."""
-        p.resetBaseVelocity(self.body(name), list(linear), list(angular),
-                            physicsClientId=self.client)
+        p.resetBaseVelocity(
+            self.body(name), list(linear), list(angular), physicsClientId=self.client
+        )
 
     def set_joint(self, name: str, joint_index: int, angle: float) -> None:
         """Set a revolute joint of body ``name`` to ``angle`` (rad)."""
@@ -221,7 +273,9 @@ class BulletWorld:
         p.restoreState(stateId=state_id, physicsClientId=self.client)
 
     # ----- sensing ------------------------------------------------------------------------
-    def ray_test(self, starts: FloatArray, ends: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
+    def ray_test(
+        self, starts: FloatArray, ends: FloatArray
+    ) -> tuple[FloatArray, NDArray[np.int64]]:
         """Batched ray casts: (N, 3) starts and ends -> hit fractions (N,) and body ids (N,).
 
         A fraction of 1.0 with body id -1 means no hit.
@@ -232,7 +286,8 @@ class BulletWorld:
         batch = p.MAX_RAY_INTERSECTION_BATCH_SIZE
         for lo in range(0, n, batch):
             hits = p.rayTestBatch(
-                starts[lo:lo + batch].tolist(), ends[lo:lo + batch].tolist(),
+                starts[lo : lo + batch].tolist(),
+                ends[lo : lo + batch].tolist(),
                 physicsClientId=self.client,
             )
             for i, hit in enumerate(hits):
@@ -241,16 +296,28 @@ class BulletWorld:
         return fractions, ids
 
     def render(
-        self, *, width: int, height: int, view: Sequence[float], projection: Sequence[float],
+        self,
+        *,
+        width: int,
+        height: int,
+        view: Sequence[float],
+        projection: Sequence[float],
         lighting: Lighting,
     ) -> tuple[NDArray[np.uint8], NDArray[np.int32]]:
         """Tiny-renderer image (H, W, 3) uint8 RGB and (H, W) body-id labels (-1 = background)."""
         _, _, rgba, _, seg = p.getCameraImage(
-            width, height, viewMatrix=list(view), projectionMatrix=list(projection),
-            renderer=p.ER_TINY_RENDERER, shadow=0,
-            lightDirection=list(lighting.direction), lightColor=list(lighting.colour),
-            lightAmbientCoeff=lighting.ambient, lightDiffuseCoeff=lighting.diffuse,
-            lightSpecularCoeff=lighting.specular, physicsClientId=self.client,
+            width,
+            height,
+            viewMatrix=list(view),
+            projectionMatrix=list(projection),
+            renderer=p.ER_TINY_RENDERER,
+            shadow=0,
+            lightDirection=list(lighting.direction),
+            lightColor=list(lighting.colour),
+            lightAmbientCoeff=lighting.ambient,
+            lightDiffuseCoeff=lighting.diffuse,
+            lightSpecularCoeff=lighting.specular,
+            physicsClientId=self.client,
         )
         rgb = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3]
         labels = np.asarray(seg, dtype=np.int32).reshape(height, width)
@@ -265,7 +332,7 @@ class BulletWorld:
 
 @dataclass(frozen=True, kw_only=True)
 class LinkSpec:
-    """A revolute link of an articulated body: parent link index (0 = base), joint offset and axis."""
+    """A revolute link of an articulated body: parent index (0 = base), joint offset and axis."""
 
     parent: int
     offset: tuple[float, float, float]

@@ -38,8 +38,9 @@ def test_wrap_angle_range_and_values() -> None:
 
 def test_compose_known_case() -> None:
     # a robot at (1, 2) facing +y steps 1 m forward and 0.5 m left: ends at (0.5, 3)
-    np.testing.assert_allclose(compose([1, 2, math.pi / 2], [1, 0.5, 0.1]),
-                               [0.5, 3.0, math.pi / 2 + 0.1], atol=1e-12)
+    np.testing.assert_allclose(
+        compose([1, 2, math.pi / 2], [1, 0.5, 0.1]), [0.5, 3.0, math.pi / 2 + 0.1], atol=1e-12
+    )
 
 
 @given(poses, poses)
@@ -88,13 +89,17 @@ def test_image_edge_is_half_fov() -> None:
     m = CameraModel(width=320, height=240, hfov_deg=56.3)
     ray = pixel_rays([[0.0, m.cy]], m.fx, m.fy, m.cx, m.cy)[0]
     assert math.degrees(math.atan2(ray[1], ray[0])) == pytest.approx(56.3 / 2)
-    assert m.vfov_deg == pytest.approx(2 * math.degrees(math.atan(0.75 * math.tan(math.radians(28.15)))))
+    assert m.vfov_deg == pytest.approx(
+        2 * math.degrees(math.atan(0.75 * math.tan(math.radians(28.15))))
+    )
 
 
 def test_ground_projection_of_pitched_camera() -> None:
     # camera 0.5 m high pitched down 30°: the image centre hits the ground 0.5 / tan 30° ahead
     m = CameraModel()
-    state = CameraState(position=np.array([0.0, 0.0, 0.5]), head_yaw=0.0, head_pitch=math.radians(30))
+    state = CameraState(
+        position=np.array([0.0, 0.0, 0.5]), head_yaw=0.0, head_pitch=math.radians(30)
+    )
     ray = state.rotation() @ pixel_rays([[m.cx, m.cy]], m.fx, m.fy, m.cx, m.cy)[0]
     xy, hit = ray_ground_intersection(state.position, ray[None, :])
     assert hit[0]

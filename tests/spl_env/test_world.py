@@ -33,8 +33,9 @@ def test_camera_projection_matches_rendered_labels(scene) -> None:
     robot.place(np.array([-1.0, 0.5, math.pi / 2]), head=np.array([0.3, 0.1]))
     camera = Camera(CameraConfig(noise_std=0.0))
     position, rotation = robot.camera_pose_world()
-    _, labels = camera.render(world, position, rotation, EpisodeLighting.default(),
-                              np.random.default_rng(0))
+    _, labels = camera.render(
+        world, position, rotation, EpisodeLighting.default(), np.random.default_rng(0)
+    )
     m = camera.config.model
     mask = labels == world.body(bodies.poles[0])
     rows, cols = np.nonzero(mask)
@@ -48,11 +49,15 @@ def test_camera_projection_matches_rendered_labels(scene) -> None:
     # columns: the axis lies inside the label, and one row of it is about 2 r f / depth wide
     assert cols.min() < uv[:, 0].mean() < cols.max() + 1
     middle = np.array([*poles[0], geometry.top_m / 2])
-    [(u_mid, v_mid)], _ = project_points(((middle - position) @ rotation)[None, :], m.fx, m.fy, m.cx, m.cy)
+    [(u_mid, v_mid)], _ = project_points(
+        ((middle - position) @ rotation)[None, :], m.fx, m.fy, m.cx, m.cy
+    )
     depth = float((middle - position) @ rotation[:, 0])
     row_cols = cols[rows == int(v_mid)]
     assert row_cols.min() <= u_mid <= row_cols.max() + 1
-    assert row_cols.max() + 1 - row_cols.min() == pytest.approx(2 * geometry.radius_m * m.fx / depth, abs=1.5)
+    assert row_cols.max() + 1 - row_cols.min() == pytest.approx(
+        2 * geometry.radius_m * m.fx / depth, abs=1.5
+    )
 
 
 def test_ray_test_hits_pole_at_its_surface(scene) -> None:
@@ -73,7 +78,9 @@ def test_walk_respects_speed_and_acceleration_limits(scene) -> None:
     assert first[0] == pytest.approx(cfg.max_accel[0] * 0.1 * 0.1)  # v after one step times dt
     for _ in range(50):
         robot.walk_step(np.array([1.0, -1.0, 5.0]), 0.1)
-    np.testing.assert_allclose(robot.velocity, [cfg.max_speed[0], -cfg.max_speed[1], cfg.max_speed[2]])
+    np.testing.assert_allclose(
+        robot.velocity, [cfg.max_speed[0], -cfg.max_speed[1], cfg.max_speed[2]]
+    )
 
 
 def test_walk_increment_is_exact_constant_twist_arc(scene) -> None:

@@ -1,0 +1,133 @@
+"""Pictures for people: a top-down field with truth and belief beside the camera image.
+
+Colours (BGR internally, RGB out): true pose green, SLAM estimate orange with its 95 %
+covariance ellipse, odometry-only pose grey; true poles as filled discs in their colours,
+estimated poles as crosses with ellipses; other robots by team colour.
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from perception.geometry import FloatArray
+from perception.types import LandmarkObservation, PerceptionOutput, PoleCode
+from spl_env.field import FieldDimensions
+from spl_env.sim.scene import POLE_BAND_RGBA
+from spl_env.simulation import WorldState
+
+PX_PER_M = 40
+CHI2_2DOF_95 = 5.991  # 95 % quantile of chi-square with 2 dof
+TRUE_BGR = (60, 200, 60)
+SLAM_BGR = (0, 140, 255)
+ODOM_BGR = (150, 150, 150)
+TEAM_BGR = ((200, 60, 30), (40, 40, 210))
+
+
+def _bgr(colour: str) -> tuple[int, int, int]:
+    r, g, b, _ = POLE_BAND_RGBA[colour]
+    return int(255 * b), int(255 * g), int(255 * r)
+
+
+class TopDownView:
+    """Draws the field from above at :data:`PX_PER_M` pixels per metre."""
+
+    def __init__(self, dims: FieldDimensions) -> None:
+        self.dims = dims
+        carpet_l, carpet_w = dims.carpet_size_m
+        self.size = (int(carpet_w * PX_PER_M), int(carpet_l * PX_PER_M))  # rows, cols
+        self.background = self._draw_field()
+
+    def px(self, xy: FloatArray) -> tuple[int, int]:
+        """Pixel (col, row) of field point ``xy`` (2,)."""
+        rows, cols = self.size
+        return round(cols / 2 + xy[0] * PX_PER_M), round(rows / 2 - xy[1] * PX_PER_M)
+
+    def _draw_field(self) -> NDArray[np.uint8]:
+        img = np.zeros((*self.size, 3), np.uint8)
+        img[:] = (40, 120, 45)
+        w = max(1, round(self.dims.line_width_m * PX_PER_M))
+        for x0, y0, x1, y1 in self.dims.line_segments():
+            cv2.line(
+                img, self.px(np.array([x0, y0])), self.px(np.array([x1, y1])), (240, 240, 240), w
+            )
+        radius = round(self.dims.centre_circle_diameter_m / 2 * PX_PER_M)
+        cv2.circle(img, self.px(np.zeros(2)), radius, (240, 240, 240), w)
+        for post in self.dims.goal_posts():
+            cv2.circle(img, self.px(post), 3, (255, 255, 255), -1)
+        return img
+
+    def draw(
+        self, state: WorldState, output: PerceptionOutput, codes: tuple[PoleCode, ...]
+    ) -> NDArray[np.uint8]:
+        """(H, W, 3) BGR top-down picture of the truth and the belief."""
+        img = self.background.copy()
+        colour_of = {c.landmark_id: c for c in codes}
+        for lid, xy in zip(state.landmark_ids, state.landmarks, strict=True):
+            code = colour_of[int(lid)]
+            cv2.circle(img, self.px(xy), 7, _bgr(code.top), -1)
+            cv2.circle(img, self.px(xy), 3, _bgr(code.bottom), -1)
+        slam = output.slam
+        for lid, xy, cov in zip(slam.landmark_ids, slam.landmarks, slam.landmark_covs, strict=True):
+            self._ellipse(img, xy, cov, SLAM_BGR)
+            c = self.px(xy)
+            cv2.drawMarker(img, c, _bgr(colour_of[int(lid)].top), cv2.MARKER_CROSS, 10, 2)
+        for pose, team in zip(state.robots, state.robot_teams, strict=True):
+            self._robot(img, pose, TEAM_BGR[int(team)])
+        cv2.circle(img, self.px(state.ball), 4, (255, 255, 255), -1)
+        self._robot(img, output.odometry_pose, ODOM_BGR)
+        self._ellipse(img, slam.pose[:2], slam.pose_cov[:2, :2], SLAM_BGR)
+        self._robot(img, slam.pose, SLAM_BGR)
+        self._robot(img, state.robot_pose, TRUE_BGR)
+        return img
+
+    def _robot(self, img: NDArray[np.uint8], pose: FloatArray, bgr: tuple[int, int, int]) -> None:
+        c = self.px(pose[:2])
+        tip = self.px(pose[:2] + 0.3 * np.array([math.cos(pose[2]), math.sin(pose[2])]))
+        cv2.circle(img, c, 6, bgr, 2)
+        cv2.line(img, c, tip, bgr, 2)
+
+    def _ellipse(
+        self, img: NDArray[np.uint8], xy: FloatArray, cov: FloatArray, bgr: tuple[int, int, int]
+    ) -> None:
+        values, vectors = np.linalg.eigh(0.5 * (cov + cov.T))
+        axes = np.sqrt(np.clip(values, 0.0, None) * CHI2_2DOF_95) * PX_PER_M
+        angle = -math.degrees(math.atan2(vectors[1, 1], vectors[0, 1]))
+        size = (int(min(axes[1], 1e4)), int(min(axes[0], 1e4)))
+        cv2.ellipse(img, self.px(xy), size, angle, 0, 360, bgr, 1)
+
+
+def draw_detections(
+    image: NDArray[np.uint8], observations: tuple[LandmarkObservation, ...]
+) -> NDArray[np.uint8]:
+    """Copy of an RGB camera image (H, W, 3) with each detection's box, id and range."""
+    out = image.copy()
+    for obs in observations:
+        if np.all(np.isfinite(obs.box)):
+            u0, v0, u1, v1 = (round(v) for v in obs.box)
+            cv2.rectangle(out, (u0, v0), (u1, v1), (255, 255, 0), 1)
+            cv2.putText(
+                out,
+                f"{obs.landmark_id}:{obs.range_m:.1f}m",
+                (u0, max(v0 - 3, 8)),
+                cv2.FONT_HERSHEY_PLAIN,
+                0.8,
+                (255, 255, 0),
+                1,
+            )
+    return out
+
+
+def side_by_side(
+    top_down_bgr: NDArray[np.uint8], camera_rgb: NDArray[np.uint8]
+) -> NDArray[np.uint8]:
+    """(H, W, 3) uint8 RGB: the top-down view left, the camera image scaled to its height right."""
+    rows = top_down_bgr.shape[0]
+    scale = rows / camera_rgb.shape[0]
+    cam = cv2.resize(
+        camera_rgb, (round(camera_rgb.shape[1] * scale), rows), interpolation=cv2.INTER_NEAREST
+    )
+    return np.ascontiguousarray(np.hstack([cv2.cvtColor(top_down_bgr, cv2.COLOR_BGR2RGB), cam]))

@@ -1,0 +1,74 @@
+"""The ray-casting interface the range sensors use, so that they need no physics engine.
+
+The PyBullet world provides it behind ``rayTestBatch``; tests provide closed-form scenes.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from perception.geometry import FloatArray, transform_points
+
+
+class RayCaster(Protocol):
+    """Casts a batch of straight rays and reports the first thing each one hits."""
+
+    def __call__(
+        self, starts: FloatArray, ends: FloatArray
+    ) -> tuple[FloatArray, NDArray[np.int64]]:
+        """Cast rays from (N, 3) ``starts`` to (N, 3) ``ends`` (field frame, m).
+
+        Returns the (N,) hit fraction in [0, 1] along each ray (1.0 = no hit) and the (N,) id of
+        the body hit (-1 = none).
+        """
+        ...
+
+
+def fan_rays(
+    robot_pose: ArrayLike,
+    *,
+    mount_x_m: float,
+    mount_height_m: float,
+    angles: FloatArray,
+    length_m: float,
+) -> tuple[FloatArray, FloatArray]:
+    """Horizontal rays from a sensor on the robot, as (N, 3) field-frame starts and ends (m).
+
+    The sensor sits ``mount_x_m`` ahead of the robot origin at ``mount_height_m``; ``angles``
+    (N,) are the ray directions in the robot frame (rad, 0 = forward, + = left) and every ray is
+    ``length_m`` long. ``robot_pose`` is the (3,) field pose ``(x, y, theta)``.
+    """
+    pose = np.asarray(robot_pose, dtype=np.float64)
+    if pose.shape != (3,) or not np.all(np.isfinite(pose)):
+        raise ValueError(f"robot_pose must be a finite (3,) pose (x, y, theta), got {pose!r}")
+    local_ends = np.column_stack([mount_x_m + length_m * np.cos(angles), length_m * np.sin(angles)])
+    origin = transform_points(pose, [[mount_x_m, 0.0]])
+    height = np.full((len(angles), 1), mount_height_m)
+    starts = np.hstack([np.repeat(origin, len(angles), axis=0), height])
+    ends = np.hstack([transform_points(pose, local_ends), height])
+    return starts, ends
+
+
+def cast(
+    ray_caster: RayCaster, starts: FloatArray, ends: FloatArray, ignore_body: int
+) -> tuple[FloatArray, NDArray[np.int64]]:
+    """Cast rays; return their hit distances (N,) (m from the start) and hit body ids (N,).
+
+    A ray counts as a hit when it stops short of its end on a body other than ``ignore_body``
+    (the robot carrying the sensor); the others get distance NaN and body -1.
+    """
+    fractions, bodies = ray_caster(starts, ends)
+    fractions = np.asarray(fractions, dtype=np.float64)
+    bodies = np.asarray(bodies, dtype=np.int64)
+    n = len(starts)
+    if fractions.shape != (n,) or bodies.shape != (n,):
+        raise ValueError(
+            f"ray_caster must return two arrays of shape ({n},), "
+            f"got {fractions.shape} and {bodies.shape}"
+        )
+    hit = (fractions < 1.0) & (bodies >= 0) & (bodies != ignore_body)
+    lengths = np.linalg.norm(ends - starts, axis=1)
+    return np.where(hit, fractions * lengths, np.nan), np.where(hit, bodies, -1)
