@@ -98,7 +98,7 @@ class FieldDimensions:
 
         The posts stand behind the goal line, their front touching its outer edge.
         """
-        x = self.half_length_m + 0.5 * self.goal_post_diameter_m
+        x = self.half_length_m + 0.5 * self.line_width_m + 0.5 * self.goal_post_diameter_m
         y = 0.5 * self.goal_inner_width_m + 0.5 * self.goal_post_diameter_m
         return np.array([[-x, -y], [-x, y], [x, -y], [x, y]])
 
@@ -107,9 +107,9 @@ class FieldDimensions:
 class PoleLayout:
     """Six two-coloured landmark poles just outside the touch lines (seed 000 §3.1.2).
 
-    Seed 000 places the Gutmann-Fox poles around a 9 x 6 m field: three along each touch line,
-    at the corners' x and on the halfway line, pink over a colour on the left side and the colour
-    over pink on the right, so that every pole has a unique colour code.
+    Seed 000 spreads the Gutmann-Fox poles around a 9 x 6 m field: three along each touch line
+    (by default at x = -3, 0 and 3 m), pink over a colour on the left side and the colour over
+    pink on the right, so that every pole has a unique colour code.
     """
 
     x_positions_m: tuple[float, float, float] = (-3.0, 0.0, 3.0)
@@ -121,10 +121,11 @@ class PoleLayout:
             raise ValueError(
                 f"PoleLayout.x_positions_m must hold 3 values, got {len(self.x_positions_m)}"
             )
-        if not (0.0 < self.offset_outside_m < 0.7):
+        if not all(math.isfinite(x) for x in self.x_positions_m):
+            raise ValueError(f"PoleLayout.x_positions_m must be finite, got {self.x_positions_m}")
+        if not (math.isfinite(self.offset_outside_m) and self.offset_outside_m > 0):
             raise ValueError(
-                "PoleLayout.offset_outside_m must be in (0, 0.7) to stay on the carpet, "
-                f"got {self.offset_outside_m}"
+                f"PoleLayout.offset_outside_m must be finite and > 0, got {self.offset_outside_m}"
             )
 
     def codes(self) -> tuple[PoleCode, ...]:

@@ -58,6 +58,19 @@ class TopDownView:
         cv2.circle(img, self.px(np.zeros(2)), radius, (240, 240, 240), w)
         for post in self.dims.goal_posts():
             cv2.circle(img, self.px(post), 3, (255, 255, 255), -1)
+        for k, (label, bgr) in enumerate(
+            (("true", TRUE_BGR), ("SLAM", SLAM_BGR), ("odometry", ODOM_BGR))
+        ):
+            cv2.putText(
+                img,
+                label,
+                (8 + 70 * k, self.size[0] - 6),
+                cv2.FONT_HERSHEY_SIMPLEX,
+                0.4,
+                bgr,
+                1,
+                cv2.LINE_AA,
+            )
         return img
 
     def draw(

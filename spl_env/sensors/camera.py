@@ -59,7 +59,7 @@ class CameraConfig:
     near_m: float = 0.01  # near clipping plane
     far_m: float = 20.0  # far clipping plane
     noise_std: float = 2.0  # Gaussian sensor noise (8-bit levels)
-    exposure_time_s: float = 0.03  # for motion blur from head and body turning
+    exposure_time_s: float = 0.01  # for motion blur from head and body turning
     randomise_lighting: bool = False
     randomisation: LightingRandomisation = field(default_factory=LightingRandomisation)
 
@@ -166,7 +166,8 @@ class Camera:
             k = round(blur_px)
             image = np.asarray(cv2.blur(image, (k, 1)), dtype=np.float32)
         if self.config.noise_std > 0:
-            image += rng.normal(0.0, self.config.noise_std, size=image.shape).astype(np.float32)
+            noise = rng.standard_normal(size=image.shape, dtype=np.float32)
+            image += np.float32(self.config.noise_std) * noise
         return np.clip(image, 0, 255).astype(np.uint8), labels
 
 

@@ -57,11 +57,22 @@ class RobotConfig:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"RobotConfig.{name} must be finite and > 0, got {value}")
-        if not self.head_pitch_min_rad < 0 < self.head_pitch_max_rad:
+        if not self.head_yaw_limit_rad <= math.pi:
             raise ValueError(
-                "RobotConfig needs head_pitch_min_rad < 0 < head_pitch_max_rad, got "
+                f"RobotConfig.head_yaw_limit_rad must be <= pi, got {self.head_yaw_limit_rad}"
+            )
+        if not -math.pi / 2 < self.head_pitch_min_rad < 0 < self.head_pitch_max_rad < math.pi / 2:
+            raise ValueError(
+                "RobotConfig needs -pi/2 < head_pitch_min_rad < 0 < head_pitch_max_rad < pi/2, got "
                 f"{self.head_pitch_min_rad} and {self.head_pitch_max_rad}"
             )
+        if len(self.camera_offset_m) != 3 or not all(map(math.isfinite, self.camera_offset_m)):
+            raise ValueError(
+                f"RobotConfig.camera_offset_m must be 3 finite values, got {self.camera_offset_m}"
+            )
+        for name in ("head_pitch_joint_offset_m", "camera_tilt_rad"):
+            if not math.isfinite(getattr(self, name)):
+                raise ValueError(f"RobotConfig.{name} must be finite, got {getattr(self, name)}")
         for name in ("sway_roll_rad", "sway_pitch_rad", "sway_bob_m"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):

@@ -52,6 +52,18 @@ class SceneConfig:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"SceneConfig.{name} must be finite and > 0, got {value}")
+        carpet_l = self.dimensions.carpet_size_m[0]
+        r = self.poles.geometry.radius_m
+        if self.poles.offset_outside_m + r > self.dimensions.border_strip_m:
+            raise ValueError(
+                "SceneConfig.poles.offset_outside_m + pole radius must fit in the border strip "
+                f"({self.dimensions.border_strip_m} m), got {self.poles.offset_outside_m} + {r}"
+            )
+        if any(abs(x) + r > carpet_l / 2 for x in self.poles.x_positions_m):
+            raise ValueError(
+                f"SceneConfig.poles.x_positions_m must lie on the carpet (|x| + radius <= "
+                f"{carpet_l / 2} m), got {self.poles.x_positions_m}"
+            )
         if not (0.0 <= self.ball_rolling_friction < 1.0):
             raise ValueError(
                 "SceneConfig.ball_rolling_friction must be in [0, 1), "
@@ -66,7 +78,6 @@ class SceneBodies:
     poles: dict[int, str]  # landmark id -> body name
     goal_posts: tuple[str, ...]
     ball: str
-    static_obstacles: tuple[str, ...]
 
 
 def build_scene(world: BulletWorld, config: SceneConfig, rng: np.random.Generator) -> SceneBodies:
@@ -113,9 +124,7 @@ def build_scene(world: BulletWorld, config: SceneConfig, rng: np.random.Generato
         rolling_friction=config.ball_rolling_friction,
         restitution=0.3,
     )
-    return SceneBodies(
-        poles=poles, goal_posts=posts, ball="ball", static_obstacles=(*posts, *poles.values())
-    )
+    return SceneBodies(poles=poles, goal_posts=posts, ball="ball")
 
 
 def _flat_box(x0: float, y0: float, x1: float, y1: float, width: float) -> VisualPart:

@@ -242,11 +242,6 @@ class BulletWorld:
         pos, _ = p.getBasePositionAndOrientation(self.body(name), physicsClientId=self.client)
         return np.asarray(pos, dtype=np.float64)
 
-    def velocity(self, name: str) -> FloatArray:
-        """Linear velocity (3,) of body ``name`` (m/s)."""
-        lin, _ = p.getBaseVelocity(self.body(name), physicsClientId=self.client)
-        return np.asarray(lin, dtype=np.float64)
-
     def set_velocity(
         self, name: str, linear: Sequence[float], angular: Sequence[float] = (0.0, 0.0, 0.0)
     ) -> None:

@@ -131,3 +131,26 @@ def test_bad_configs_rejected() -> None:
         SceneConfig(board_height_m=-1.0)
     with pytest.raises(ValueError, match="time_step_s"):
         BulletWorld(time_step_s=0.0)
+
+
+def test_camera_pose_matches_pybullet_head_link_while_swaying(scene) -> None:
+    import pybullet as p
+
+    from perception.geometry import rot_y
+
+    world, _, robot = scene
+    robot.place(np.array([0.4, -0.7, 2.9]), head=np.array([0.6, -0.3]))
+    for _ in range(7):  # walk a little so the gait sways the body
+        robot.walk_step(np.array([0.2, 0.05, 0.3]), 0.1)
+    robot.sync()
+    assert abs(robot.sway()[0]) > 1e-3
+    link = p.getLinkState(
+        world.body("self"), 1, computeForwardKinematics=True, physicsClientId=world.client
+    )
+    link_pos = np.array(link[4])
+    link_rot = np.array(p.getMatrixFromQuaternion(link[5])).reshape(3, 3)
+    position, rotation = robot.camera_pose_world()
+    np.testing.assert_allclose(
+        position, link_pos + link_rot @ robot.config.camera_offset_m, atol=1e-6
+    )
+    np.testing.assert_allclose(rotation, link_rot @ rot_y(robot.config.camera_tilt_rad), atol=1e-6)
