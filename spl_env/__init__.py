@@ -1,0 +1,22 @@
+"""spl-env: Gymnasium environments of the RoboCup SPL field, observed through real perception.
+
+Importing the package registers every env id in :data:`ENV_IDS` with Gymnasium::
+
+    import gymnasium as gym
+    import spl_env  # noqa: F401
+    env = gym.make("SPL/ActiveVision-v0")
+"""
+
+from __future__ import annotations
+
+from gymnasium.envs.registration import register, registry
+
+ENV_IDS: tuple[str, ...] = ("SPL/ActiveVision-v0",)
+
+_ENTRY_POINTS = {"SPL/ActiveVision-v0": "spl_env.envs.active_vision:ActiveVisionEnv"}
+
+for _env_id in ENV_IDS:
+    if _env_id not in registry:
+        register(id=_env_id, entry_point=_ENTRY_POINTS[_env_id], max_episode_steps=None)
+
+__all__ = ["ENV_IDS"]

@@ -1,0 +1,109 @@
+"""Scripted head policies for ``SPL/ActiveVision-v0``, with SB3's ``predict`` signature.
+
+- :class:`HeadScan`: sweeps the head yaw sinusoidally at level pitch (the classic SPL scan);
+- :class:`LookAtStalest`: points the head at the mapped pole seen least recently, scanning while
+  the map is empty;
+- :class:`FixedHead`: looks straight ahead (a lower bound).
+
+Policies are built from the env's :class:`spl_env.config.EnvConfig` (``from_config``) so that
+their actions follow the configured head limits and control rate.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from typing import Any
+
+import numpy as np
+
+from spl_env.config import EnvConfig
+from spl_env.sim.robot import RobotConfig
+
+
+def head_action(robot: RobotConfig, yaw_rad: float, pitch_rad: float) -> np.ndarray:
+    """The env action (2,) float32 whose head target is ``(yaw_rad, pitch_rad)``.
+
+    Targets beyond the joint limits map beyond [-1, 1] and are clipped there: the head then
+    looks as far as its joint goes.
+    """
+    yaw = yaw_rad / robot.head_yaw_limit_rad
+    span = robot.head_pitch_max_rad - robot.head_pitch_min_rad
+    pitch = 2.0 * (pitch_rad - robot.head_pitch_min_rad) / span - 1.0
+    return np.clip(np.array([yaw, pitch]), -1.0, 1.0).astype(np.float32)
+
+
+class ScriptedPolicy(ABC):
+    """Base: the head limits, a clock, and SB3's ``predict``."""
+
+    def __init__(self, robot: RobotConfig, control_dt_s: float) -> None:
+        self.robot = robot
+        self.control_dt_s = control_dt_s
+        self.t_s = 0.0
+
+    @classmethod
+    def from_config(cls, config: EnvConfig) -> ScriptedPolicy:
+        """The policy for an env built from ``config``."""
+        return cls(config.sim.robot, config.sim.control_dt_s)
+
+    def reset(self) -> None:
+        """Start of an episode."""
+        self.t_s = 0.0
+
+    @abstractmethod
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        """Action (2,) float32 for one observation."""
+
+    def predict(
+        self,
+        obs: dict[str, np.ndarray],
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, None]:
+        """SB3-style: ``episode_start`` true restarts the policy's clock."""
+        if episode_start is not None and np.any(episode_start):
+            self.reset()
+        action = self.act(obs)
+        self.t_s += self.control_dt_s
+        return action, None
+
+
+class HeadScan(ScriptedPolicy):
+    """Yaw ``amplitude · sin(2π t / period)`` at level pitch."""
+
+    amplitude_rad = math.radians(90.0)
+    period_s = 4.0
+
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        yaw = self.amplitude_rad * math.sin(2 * math.pi * self.t_s / self.period_s)
+        return head_action(self.robot, yaw, 0.0)
+
+
+class LookAtStalest(HeadScan):
+    """Look at the mapped pole that was seen least recently; scan while none is mapped."""
+
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        mapped = obs["landmarks_mask"] > 0.5
+        if not mapped.any():
+            return super().act(obs)
+        since = np.where(mapped, obs["landmarks_since_seen"], -1.0)
+        target = int(np.argmax(since))
+        bearing = math.atan2(
+            float(obs["landmarks_sin_bearing"][target]), float(obs["landmarks_cos_bearing"][target])
+        )
+        return head_action(self.robot, bearing, 0.0)
+
+
+class FixedHead(ScriptedPolicy):
+    """Always look straight ahead at level pitch."""
+
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        return head_action(self.robot, 0.0, 0.0)
+
+
+BASELINES: dict[str, type[ScriptedPolicy]] = {
+    "scan": HeadScan,
+    "look_at_stalest": LookAtStalest,
+    "fixed": FixedHead,
+}

@@ -1,0 +1,200 @@
+"""Evaluate a saved SB3 model or a scripted baseline on an SPL env.
+
+    python -m agents.evaluate --policy scan --episodes 3 --out outputs/eval_scan
+    python -m agents.evaluate --policy runs/ppo/model.zip --episodes 3 --out outputs/eval_ppo
+
+Writes ``metrics.json`` (per episode and mean: return, mean SLAM position error, mean
+odometry-only error, mean pose NEES, landmark error) and ``trajectory.png`` (the first episode:
+true path green, SLAM orange, odometry grey, on the field).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Protocol
+
+import cv2
+import gymnasium as gym
+import numpy as np
+
+import spl_env  # noqa: F401  (registers the env ids)
+from agents.baselines import BASELINES
+from perception.metrics import landmark_errors, pose_nees, position_error
+from spl_env.config import EnvConfig
+from spl_env.field import FieldDimensions
+from spl_env.rendering import ODOM_BGR, SLAM_BGR, TRUE_BGR, TopDownView
+
+
+class Policy(Protocol):
+    """Anything with SB3's ``predict``."""
+
+    def predict(
+        self, obs: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True
+    ) -> tuple[np.ndarray, Any]: ...
+
+
+@dataclass
+class EpisodeRecord:
+    """What one episode produced, step by step (T steps incl. the reset)."""
+
+    episode_return: float = 0.0
+    true_poses: list[np.ndarray] = field(default_factory=list)
+    slam_poses: list[np.ndarray] = field(default_factory=list)
+    odometry_poses: list[np.ndarray] = field(default_factory=list)
+    pose_covs: list[np.ndarray] = field(default_factory=list)
+    step_seconds: list[float] = field(default_factory=list)
+    frames: list[np.ndarray] = field(default_factory=list)
+    final_info: dict[str, Any] = field(default_factory=dict)
+
+    def add(self, info: dict[str, Any]) -> None:
+        self.true_poses.append(info["ground_truth"]["robot_pose"])
+        self.slam_poses.append(info["perception"]["pose"])
+        self.odometry_poses.append(info["perception"]["odometry_pose"])
+        self.pose_covs.append(info["perception"]["pose_cov"])
+        self.step_seconds.append(sum(info["timing"].values()))
+        self.final_info = info
+
+
+def load_policy(spec: str, config: EnvConfig) -> Policy:
+    """A baseline by name (for an env built from ``config``), or an SB3 PPO ``.zip``."""
+    if spec in BASELINES:
+        return BASELINES[spec].from_config(config)
+    if spec.endswith(".zip") and Path(spec).exists():
+        from stable_baselines3 import PPO
+
+        return PPO.load(spec, device="cpu")
+    raise ValueError(
+        f"policy must be one of {sorted(BASELINES)} or an existing .zip path, got {spec!r}"
+    )
+
+
+def run_episode(env: gym.Env, policy: Policy, seed: int, frame_every: int = 0) -> EpisodeRecord:
+    """One episode; with ``frame_every > 0`` keeps ``env.render()`` every that many steps."""
+    record = EpisodeRecord()
+    obs, info = env.reset(seed=seed)
+    record.add(info)
+    done, step = False, 0
+    while not done:
+        action, _ = policy.predict(obs, episode_start=np.array([step == 0]), deterministic=True)
+        obs, reward, terminated, truncated, info = env.step(action)
+        record.episode_return += float(reward)
+        record.add(info)
+        step += 1
+        if frame_every and step % frame_every == 0:
+            record.frames.append(np.asarray(env.render()))
+        done = terminated or truncated
+    return record
+
+
+def episode_metrics(record: EpisodeRecord) -> dict[str, float]:
+    """Summary numbers of one episode (SI units)."""
+    slam_err = [
+        position_error(t, e) for t, e in zip(record.true_poses, record.slam_poses, strict=True)
+    ]
+    odom_err = [
+        position_error(t, e) for t, e in zip(record.true_poses, record.odometry_poses, strict=True)
+    ]
+    nees = [
+        pose_nees(t, e, c)
+        for t, e, c in zip(record.true_poses, record.slam_poses, record.pose_covs, strict=True)
+    ]
+    gt, per = record.final_info["ground_truth"], record.final_info["perception"]
+    lm = landmark_errors(gt["landmark_ids"], gt["landmarks"], per["landmark_ids"], per["landmarks"])
+    return {
+        "return": record.episode_return,
+        "mean_position_error_m": float(np.mean(slam_err)),
+        "final_position_error_m": float(slam_err[-1]),
+        "mean_odometry_error_m": float(np.mean(odom_err)),
+        "final_odometry_error_m": float(odom_err[-1]),
+        "mean_pose_nees": float(np.mean(nees)),
+        "mean_landmark_error_m": float(np.mean(lm)) if len(lm) else float("nan"),
+        "landmarks_mapped": len(lm),
+        "mean_step_ms": 1000.0 * float(np.mean(record.step_seconds[1:])),
+        "steps": len(record.true_poses) - 1,
+    }
+
+
+def trajectory_plot(dims: FieldDimensions, record: EpisodeRecord) -> np.ndarray:
+    """(H, W, 3) BGR picture of the true, SLAM and odometry paths and the final map."""
+    view = TopDownView(dims)
+    img = view.background.copy()
+    gt, per = record.final_info["ground_truth"], record.final_info["perception"]
+    for xy in gt["landmarks"]:
+        cv2.circle(img, view.px(xy), 6, TRUE_BGR, 2)
+    for xy in per["landmarks"]:
+        cv2.drawMarker(img, view.px(xy), SLAM_BGR, cv2.MARKER_CROSS, 12, 2)
+    for poses, colour in (
+        (record.odometry_poses, ODOM_BGR),
+        (record.slam_poses, SLAM_BGR),
+        (record.true_poses, TRUE_BGR),
+    ):
+        pts = np.array([view.px(p) for p in poses], dtype=np.int32)
+        cv2.polylines(img, [pts], False, colour, 2)
+    return img
+
+
+def summarise(per_episode: list[dict[str, float]]) -> dict[str, float]:
+    """Mean of each metric over episodes."""
+    return {k: float(np.nanmean([m[k] for m in per_episode])) for k in per_episode[0]}
+
+
+def parse_overrides(pairs: list[str]) -> dict[str, Any]:
+    """``key=value`` strings to env kwargs; values are JSON (numbers, strings in quotes, true)."""
+    out: dict[str, Any] = {}
+    for pair in pairs:
+        key, sep, value = pair.partition("=")
+        if not sep:
+            raise ValueError(f"--set takes key=value, got {pair!r}")
+        try:
+            out[key] = json.loads(value)
+        except json.JSONDecodeError:
+            out[key] = value
+    return out
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("--env", default="SPL/ActiveVision-v0")
+    parser.add_argument("--policy", default="scan", help=f"{sorted(BASELINES)} or a model .zip")
+    parser.add_argument("--episodes", type=int, default=3)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--out", type=Path, default=Path("outputs/eval"))
+    parser.add_argument(
+        "--set",
+        nargs="*",
+        default=[],
+        metavar="KEY=VALUE",
+        help="env config overrides, e.g. --set episode_s=30 body_behaviour=square",
+    )
+    args = parser.parse_args(argv)
+    env = gym.make(args.env, **parse_overrides(args.set))
+    policy = load_policy(args.policy, env.get_wrapper_attr("config"))
+    args.out.mkdir(parents=True, exist_ok=True)
+    per_episode = []
+    for k in range(args.episodes):
+        record = run_episode(env, policy, seed=args.seed + k)
+        per_episode.append(episode_metrics(record))
+        print(f"episode {k}: {json.dumps(per_episode[-1])}")
+        if k == 0:
+            cv2.imwrite(
+                str(args.out / "trajectory.png"),
+                trajectory_plot(env.get_wrapper_attr("config").sim.scene.dimensions, record),
+            )
+    env.close()
+    result = {
+        "env": args.env,
+        "policy": args.policy,
+        "episodes": per_episode,
+        "mean": summarise(per_episode),
+    }
+    (args.out / "metrics.json").write_text(json.dumps(result, indent=2))
+    print(json.dumps(result["mean"], indent=2))
+
+
+if __name__ == "__main__":
+    main()
