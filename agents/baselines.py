@@ -1,8 +1,8 @@
 """Scripted head policies for ``SPL/ActiveVision-v0``, with SB3's ``predict`` signature.
 
 - :class:`HeadScan`: sweeps the head yaw sinusoidally at level pitch (the classic SPL scan);
-- :class:`LookAtStalest`: points the head at the mapped pole seen least recently, scanning while
-  the map is empty;
+- :class:`LookAtStalest`: points the head at the reachable mapped pole seen least recently,
+  scanning while there is none;
 - :class:`FixedHead`: looks straight ahead (a lower bound).
 
 Policies are built from the env's :class:`spl_env.config.EnvConfig` (``from_config``) so that
@@ -81,18 +81,23 @@ class HeadScan(ScriptedPolicy):
 
 
 class LookAtStalest(HeadScan):
-    """Look at the mapped pole that was seen least recently; scan while none is mapped."""
+    """Look at the reachable mapped pole seen least recently; scan while there is none.
+
+    A pole is reachable when turning the head to its joint limit brings it inside the central
+    half of the image (``reach_margin_rad`` beyond the yaw limit).
+    """
+
+    reach_margin_rad = math.radians(14.0)
 
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
-        mapped = obs["landmarks_mask"] > 0.5
-        if not mapped.any():
-            return super().act(obs)
-        since = np.where(mapped, obs["landmarks_since_seen"], -1.0)
-        target = int(np.argmax(since))
-        bearing = math.atan2(
-            float(obs["landmarks_sin_bearing"][target]), float(obs["landmarks_cos_bearing"][target])
+        bearings = np.arctan2(obs["landmarks_sin_bearing"], obs["landmarks_cos_bearing"])
+        reachable = (obs["landmarks_mask"] > 0.5) & (
+            np.abs(bearings) <= self.robot.head_yaw_limit_rad + self.reach_margin_rad
         )
-        return head_action(self.robot, bearing, 0.0)
+        if not reachable.any():
+            return super().act(obs)
+        target = int(np.argmax(np.where(reachable, obs["landmarks_since_seen"], -1.0)))
+        return head_action(self.robot, float(bearings[target]), 0.0)
 
 
 class FixedHead(ScriptedPolicy):

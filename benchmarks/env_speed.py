@@ -28,9 +28,9 @@ def measure(env_id: str, steps: int, seed: int, overrides: dict[str, object]) ->
     """Time ``steps`` env steps after one warm-up episode start."""
     env = gym.make(env_id, **overrides)
     env.action_space.seed(seed)
-    t_make = time.perf_counter()
+    t_reset = time.perf_counter()
     env.reset(seed=seed)
-    reset_s = time.perf_counter() - t_make
+    reset_s = time.perf_counter() - t_reset
     totals = dict.fromkeys(PARTS, 0.0)
     step_s = []
     for _ in range(steps):

@@ -15,7 +15,14 @@ from numpy.typing import ArrayLike
 
 from perception.geometry import compose
 from perception.slam import EkfSlam, EkfSlamConfig
-from perception.types import CameraModel, PerceptionOutput, PoleCode, PoleGeometry, SensorFrame
+from perception.types import (
+    CameraModel,
+    LandmarkObservation,
+    PerceptionOutput,
+    PoleCode,
+    PoleGeometry,
+    SensorFrame,
+)
 from perception.vision.colour_filter import ColourFilterConfig, ColourPoleDetector
 
 
@@ -48,11 +55,7 @@ class PerceptionPipeline:
         """Predict with the frame's odometry, detect poles in its image, update the map."""
         self.odometry_pose = compose(self.odometry_pose, frame.odometry_delta)
         self.slam.predict(frame.odometry_delta)
-        observations = (
-            tuple(self.detector.detect(frame.image, frame.camera_state))
-            if frame.image is not None
-            else ()
-        )
+        observations = self._detect(frame)
         self.slam.update(observations)
         for obs in observations:
             self.last_seen_s[obs.landmark_id] = frame.time_s
@@ -63,3 +66,15 @@ class PerceptionPipeline:
             observations=observations,
             last_seen_s=dict(self.last_seen_s),
         )
+
+    def _detect(self, frame: SensorFrame) -> tuple[LandmarkObservation, ...]:
+        """Pole sightings from the image, or from band centres in the geometric camera mode."""
+        if frame.image is not None:
+            return tuple(self.detector.detect(frame.image, frame.camera_state))
+        found = (
+            self.detector.observe_band_centres(
+                b.landmark_id, b.upper, b.lower, b.box, frame.camera_state
+            )
+            for b in frame.band_centres or ()
+        )
+        return tuple(obs for obs in found if obs is not None)

@@ -146,11 +146,27 @@ class LandmarkObservation:
 
 
 @dataclass(frozen=True, kw_only=True)
+class BandCentres:
+    """Where a pole's two colour bands appear in the image: what the geometric camera mode
+    delivers in place of pixels.
+
+    ``upper`` and ``lower`` are (2,) ``(u, v)`` band centres (px); ``box`` is (4,)
+    ``(u0, v0, u1, v1)``.
+    """
+
+    landmark_id: int
+    upper: FloatArray
+    lower: FloatArray
+    box: FloatArray
+
+
+@dataclass(frozen=True, kw_only=True)
 class SensorFrame:
     """What the robot's sensors deliver in one control step.
 
     - ``odometry_delta`` (3,): motion since the last frame in the previous odometry pose's frame;
-    - ``image``: (H, W, 3) uint8 RGB or ``None`` when no frame was taken;
+    - ``image``: (H, W, 3) uint8 RGB, or ``None`` in the geometric camera mode;
+    - ``band_centres``: the poles' band centres in the geometric camera mode, else ``None``;
     - ``sonar``: (3, E) echo distances (m) of the left/middle/right sectors, NaN-padded, or
       ``None``;
     - ``laser``: (B,) ranges (m) with NaN for no return, or ``None``.
@@ -161,6 +177,7 @@ class SensorFrame:
     camera: CameraModel
     camera_state: CameraState
     image: NDArray[np.uint8] | None = None
+    band_centres: tuple[BandCentres, ...] | None = None
     sonar: FloatArray | None = None
     laser: FloatArray | None = None
 

@@ -8,6 +8,7 @@ Robots walk kinematically at the control rate; the ball is simulated by PyBullet
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -19,6 +20,7 @@ from perception.geometry import FloatArray, wrap_angle
 from perception.types import PoleCode, SensorFrame
 from spl_env.behaviours import WalkerConfig, WaypointWalker
 from spl_env.sensors.camera import Camera, CameraConfig, EpisodeLighting
+from spl_env.sensors.geometric_camera import GeometricCameraConfig, GeometricPoleCamera
 from spl_env.sensors.laser import Laser, LaserConfig
 from spl_env.sensors.odometry import OdometryConfig, WalkOdometry
 from spl_env.sensors.sonar import Sonar, SonarConfig
@@ -28,6 +30,7 @@ from spl_env.sim.world import BulletWorld
 from spl_env.timing import StepTimes
 
 SELF = "self"
+CAMERA_MODES = ("rendered", "geometric")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -37,6 +40,8 @@ class SimConfig:
     scene: SceneConfig = field(default_factory=SceneConfig)
     robot: RobotConfig = field(default_factory=RobotConfig)
     camera: CameraConfig = field(default_factory=CameraConfig)
+    camera_mode: str = "rendered"  # "rendered" pixels, or fast "geometric" band centres
+    geometric_camera: GeometricCameraConfig = field(default_factory=GeometricCameraConfig)
     odometry: OdometryConfig = field(default_factory=OdometryConfig)
     sonar: SonarConfig | None = field(default_factory=SonarConfig)
     laser: LaserConfig | None = None
@@ -62,6 +67,10 @@ class SimConfig:
         if not isinstance(self.n_other_robots, int) or not 0 <= self.n_other_robots <= 9:
             raise ValueError(
                 f"SimConfig.n_other_robots must be an int in [0, 9], got {self.n_other_robots!r}"
+            )
+        if self.camera_mode not in CAMERA_MODES:
+            raise ValueError(
+                f"SimConfig.camera_mode must be one of {CAMERA_MODES}, got {self.camera_mode!r}"
             )
         if not isinstance(self.scene_seed, int) or self.scene_seed < 0:
             raise ValueError(f"SimConfig.scene_seed must be an int >= 0, got {self.scene_seed!r}")
@@ -124,6 +133,14 @@ class SplSimulation:
             ]
             + [(*self.world.position(n)[:2], pole_radius) for n in self.bodies.poles.values()]
         ).reshape(-1, 3)
+        self.geometric_camera = GeometricPoleCamera(
+            config.geometric_camera,
+            config.camera.model,
+            config.scene.poles.geometry,
+            self.landmarks,
+            tuple(int(i) for i in self.landmark_ids),
+            tuple(self.world.body(self.bodies.poles[int(i)]) for i in self.landmark_ids),
+        )
         self._initial_state = self.world.save_state()
         self._rng: np.random.Generator | None = None  # the episode's, from reset()
         self._walkers: list[WaypointWalker] = []
@@ -239,9 +256,13 @@ class SplSimulation:
             raise RuntimeError("call SplSimulation.reset() before stepping")
         t0 = time.perf_counter()
         position, rotation = self.robot.camera_pose_world()
-        image, _ = self.camera.render(
-            self.world, position, rotation, self._lighting, self._rng, yaw_rate_rps=yaw_rate
-        )
+        image, band_centres = None, None
+        if self.config.camera_mode == "rendered":
+            image, _ = self.camera.render(
+                self.world, position, rotation, self._lighting, self._rng, yaw_rate_rps=yaw_rate
+            )
+        else:
+            band_centres = self.geometric_camera.observe(self.world, position, rotation, self._rng)
         t1 = time.perf_counter()
         self_id = self.world.body(SELF)
         sonar = (
@@ -261,10 +282,21 @@ class SplSimulation:
             camera=self.config.camera.model,
             camera_state=self.robot.camera_state(),
             image=image,
+            band_centres=band_centres,
             sonar=sonar,
             laser=laser,
         )
         return frame, t1 - t0, time.perf_counter() - t1
+
+    def camera_view(self) -> NDArray[np.uint8]:
+        """A noise-free render of what the camera sees now, (H, W, 3) uint8 RGB: for pictures in
+        the geometric camera mode, which renders nothing while stepping."""
+        position, rotation = self.robot.camera_pose_world()
+        quiet = Camera(dataclasses.replace(self.config.camera, noise_std=0.0))
+        image, _ = quiet.render(
+            self.world, position, rotation, self._lighting, np.random.default_rng(0)
+        )
+        return image
 
     def state(self) -> WorldState:
         """The ground truth now."""

@@ -275,7 +275,12 @@ class ColourPoleDetector:
             area = upper.area + lower.area
             if area <= best.get(landmark_id, (0, None))[0]:
                 continue
-            observation = self._observe(landmark_id, upper, lower, camera_state)
+            box = np.concatenate(
+                [np.minimum(upper.box[:2], lower.box[:2]), np.maximum(upper.box[2:], lower.box[2:])]
+            )
+            observation = self.observe_band_centres(
+                landmark_id, upper.centre, lower.centre, box, camera_state
+            )
             if observation is not None:
                 best[landmark_id] = (area, observation)
         return [best[i][1] for i in sorted(best)]
@@ -522,16 +527,22 @@ class ColourPoleDetector:
             and seed.box[2] - seed.box[0] <= cfg.max_box_width_ratio * spacing
         )
 
-    def _observe(
+    def observe_band_centres(
         self,
         landmark_id: int,
-        upper: _Band,
-        lower: _Band,
+        upper: FloatArray,
+        lower: FloatArray,
+        box: FloatArray,
         state: CameraState,
     ) -> LandmarkObservation | None:
-        """Range, bearing and covariance of a pole from its band centres, or None if implausible."""
+        """Range, bearing and covariance of a pole from its band centres, or None if implausible.
+
+        ``upper`` and ``lower`` are the (2,) ``(u, v)`` pixel centres of the upper and lower
+        colour band, ``box`` the (4,) pixel box of both; ``state`` is the camera as the joints
+        report it. This is the measurement model shared with the geometric camera mode.
+        """
         cfg = self.config
-        q = np.concatenate([upper.centre, lower.centre])
+        q = np.concatenate([upper, lower])
         steps = _JACOBIAN_STEP_PX * np.eye(4)
         samples = np.vstack([q, q + steps, q - steps])  # (9, 4)
         axis, residual = self._locate(samples[:, :2], samples[:, 2:], state)
@@ -547,16 +558,13 @@ class ColourPoleDetector:
         var_bearing = pixel_var * np.sum(d_bearing**2) + cfg.bearing_std_floor_rad**2
         if not (np.isfinite(var_range) and np.isfinite(var_bearing)):
             return None
-        box = np.concatenate(
-            [np.minimum(upper.box[:2], lower.box[:2]), np.maximum(upper.box[2:], lower.box[2:])]
-        )
         return LandmarkObservation(
             landmark_id=landmark_id,
             range_m=float(rng[0]),
             bearing_rad=float(bearing[0]),
             cov=np.diag([var_range, var_bearing]),
-            pixel=(upper.centre + lower.centre) / 2,
-            box=box,
+            pixel=(upper + lower) / 2,
+            box=np.asarray(box, dtype=np.float64),
         )
 
     def _locate(

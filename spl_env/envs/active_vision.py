@@ -64,12 +64,16 @@ class ActiveVisionEnv(gym.Env[dict[str, Any], np.ndarray]):
     - ``position_error``: ``-error_weight * |p_true - p_slam|`` (m), the true localisation error;
     - ``uncertainty``: ``-uncertainty_weight * sqrt(trace Σ_xy)`` (m), the believed position std.
 
-    **Episode**: truncated after ``episode_s`` (60 s, 600 steps); never terminated.
+    **Episode**: truncated after ``episode_s`` (60 s, 600 steps); never terminated. The body's
+    scripted walk steers on the true pose (it is scenery, not the policy's concern).
 
     **info** (after ``reset`` and every ``step``; SI units, field frame): ``perception`` (pose,
     pose_cov, odometry_pose, landmarks, landmark_ids, landmark_covs, detections),
     ``ground_truth`` (robot_pose, head, landmarks, landmark_ids, robots, robot_teams, ball),
-    ``reward_terms``, ``timing`` (physics, render, sensors, perception seconds).
+    ``reward_terms``, ``timing`` (physics, render, sensors, perception seconds; a read-only
+    mapping that compares equal across runs because seconds measure the host, not the world).
+    Robot tracks and the circle map of ARCHITECTURE §5 are not in v0: this env's perception
+    has no robot tracker or laser mapping yet.
 
     Keyword arguments override :class:`spl_env.config.EnvConfig` fields by name.
 
@@ -168,14 +172,28 @@ class ActiveVisionEnv(gym.Env[dict[str, Any], np.ndarray]):
         if self._state is None or self._output is None or self._frame is None:
             raise RuntimeError("call reset() before render()")
         top = self._top_down.draw(self._state, self._output, self.codes)
-        assert self._frame.image is not None  # the rendered camera always delivers an image
-        cam = draw_detections(self._frame.image, self._output.observations)
+        image = self._frame.image if self._frame.image is not None else self.sim.camera_view()
+        cam = draw_detections(image, self._output.observations)
         return side_by_side(top, cam)
 
     def close(self) -> None:
         if not self._closed:
             self.sim.close()
             self._closed = True
+
+    @property
+    def perception(self) -> PerceptionPipeline:
+        """The perception stack of the current episode."""
+        if self._pipeline is None:
+            raise RuntimeError("call reset() before reading perception")
+        return self._pipeline
+
+    @property
+    def sensor_frame(self) -> SensorFrame:
+        """What the robot's sensors delivered in the last step (for testing perception)."""
+        if self._frame is None:
+            raise RuntimeError("call reset() before reading sensor_frame")
+        return self._frame
 
     # ----- pieces -------------------------------------------------------------------------
     def _head_target(self, action: np.ndarray) -> np.ndarray:

@@ -154,13 +154,16 @@ class BulletWorld:
         link_vis = [
             self._shape_array(link.parts, visual=True) if link.parts else -1 for link in links
         ]
+        link_col = [
+            self._shape_array(link.parts, visual=False) if link.parts else -1 for link in links
+        ]
         body_id = p.createMultiBody(
             baseMass=0.0,
             baseCollisionShapeIndex=col,
             baseVisualShapeIndex=vis,
             basePosition=[0.0, 0.0, 0.0],
             linkMasses=[0.0] * len(links),
-            linkCollisionShapeIndices=[-1] * len(links),
+            linkCollisionShapeIndices=link_col,
             linkVisualShapeIndices=link_vis,
             linkPositions=[list(link.offset) for link in links],
             linkOrientations=[[0.0, 0.0, 0.0, 1.0]] * len(links),

@@ -60,6 +60,12 @@ def test_look_at_stalest_points_at_least_recent_pole() -> None:
     obs["landmarks_sin_bearing"][4] = math.sin(bearing)
     action, _ = LookAtStalest.from_config(CONFIG).predict(obs)
     assert action[0] == pytest.approx(30.0 / 119.5, abs=1e-6)
+    # a staler pole right behind the robot is out of the head's reach and is skipped
+    obs["landmarks_mask"][5] = 1.0
+    obs["landmarks_since_seen"][5] = 0.9
+    obs["landmarks_cos_bearing"][5] = -1.0
+    action, _ = LookAtStalest.from_config(CONFIG).predict(obs)
+    assert action[0] == pytest.approx(30.0 / 119.5, abs=1e-6)
 
 
 def test_fixed_head_and_override_parsing() -> None:

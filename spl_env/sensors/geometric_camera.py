@@ -1,0 +1,175 @@
+"""The fast "geometric" camera mode: where the poles' colour bands fall in the image, no pixels.
+
+Instead of rendering a frame and segmenting it, each pole's two band centres are projected
+through the true camera pose (gait sway included, which the robot does not sense), kept if the
+whole pole outline lies inside the image and no other body blocks the line of sight (ray casts),
+and disturbed as the rendered pipeline is: a detection is missed with a range-dependent chance
+and each centre gets Gaussian pixel noise, separately along columns and rows. Perception then
+measures range and bearing with the colour filter's own model
+(:meth:`perception.vision.ColourPoleDetector.observe_band_centres`), so both modes produce the
+same detection types.
+
+``recall_by_range`` and the pixel noise are fitted to the rendered pipeline by
+``benchmarks/fit_geometric_camera.py``, which writes ``benchmarks/results/geometric_camera.json``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from perception.geometry import FloatArray, project_points
+from perception.types import BandCentres, CameraModel, PoleGeometry
+from spl_env.sim.world import BulletWorld
+
+# The band centroid of a lit cylinder sits pi/4 radius in front of its axis, as the detector
+# assumes when it steps back to the axis.
+CENTROID_DEPTH_FACTOR = 0.25 * math.pi
+WHITE_BASE_SEEN_M = 0.05  # the detector checks this much of the white base below the bands
+
+
+@dataclass(frozen=True, kw_only=True)
+class GeometricCameraConfig:
+    """Noise of the geometric camera mode, fitted to the rendered colour-filter pipeline."""
+
+    # Fitted on 1160 visible poles (benchmarks/results/geometric_camera.json): rendered recall
+    # 1.0 below 2 m, 0.87 at 2-4 m, 0.86 at 4-6 m, 0.56 at 6-8 m; rendered RMS range error
+    # 0.134 m and bearing 0.0028 rad, which these pixel noises reproduce (0.126 m, 0.0028 rad).
+    # (upper range bound m, chance a fully visible pole nearer than it is detected)
+    recall_by_range: tuple[tuple[float, float], ...] = ((2.0, 1.0), (6.0, 0.86), (8.0, 0.56))
+    pixel_std_u_px: float = 1.15  # Gaussian noise on each band centre's column (px)
+    pixel_std_v_px: float = 0.25  # Gaussian noise on each band centre's row (px)
+    border_margin_px: float = 1.0  # the outline must stay this far inside the image
+
+    def __post_init__(self) -> None:
+        bounds = [b for b, _ in self.recall_by_range]
+        if not bounds or any(b <= a for a, b in zip([0.0, *bounds], bounds, strict=False)):
+            raise ValueError(
+                "GeometricCameraConfig.recall_by_range needs increasing positive range bounds, "
+                f"got {self.recall_by_range}"
+            )
+        if not all(0.0 <= r <= 1.0 for _, r in self.recall_by_range):
+            raise ValueError(
+                f"GeometricCameraConfig.recall_by_range recalls must be in [0, 1], "
+                f"got {self.recall_by_range}"
+            )
+        for name in ("pixel_std_u_px", "pixel_std_v_px", "border_margin_px"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(
+                    f"GeometricCameraConfig.{name} must be finite and >= 0, got {value}"
+                )
+
+    @property
+    def max_range_m(self) -> float:
+        """Beyond the last range bound nothing is detected."""
+        return self.recall_by_range[-1][0]
+
+    def recall(self, range_m: FloatArray) -> FloatArray:
+        """Detection chance (N,) of fully visible poles at ``range_m`` (N,) metres."""
+        bounds = np.array([b for b, _ in self.recall_by_range])
+        recalls = np.array([r for _, r in self.recall_by_range] + [0.0])
+        return recalls[np.searchsorted(bounds, range_m, side="right")]
+
+
+class GeometricPoleCamera:
+    """Band centres of the poles a camera sees, without rendering.
+
+    ``positions`` (L, 2) are the poles' field positions, ``ids`` (L,) their landmark ids and
+    ``body_ids`` (L,) their PyBullet bodies (for the occlusion test).
+    """
+
+    def __init__(
+        self,
+        config: GeometricCameraConfig,
+        model: CameraModel,
+        pole: PoleGeometry,
+        positions: FloatArray,
+        ids: tuple[int, ...],
+        body_ids: tuple[int, ...],
+    ) -> None:
+        self.config = config
+        self.model = model
+        self.pole = pole
+        self.positions = np.asarray(positions, dtype=np.float64).reshape(-1, 2)
+        self.ids = ids
+        self.body_ids = np.asarray(body_ids, dtype=np.int64)
+
+    def visible(
+        self, world: BulletWorld, position: FloatArray, rotation: FloatArray
+    ) -> list[BandCentres]:
+        """Noise-free band centres of every pole fully in view and unoccluded.
+
+        ``position`` (3,) and ``rotation`` (3, 3) are the true camera pose in the field frame.
+        """
+        m, pole = self.model, self.pole
+        offset = self.positions - position[:2]
+        distance = np.hypot(offset[:, 0], offset[:, 1])
+        towards = offset / np.maximum(distance, 1e-9)[:, None]
+        heights = (
+            pole.upper_centre_m,
+            pole.lower_centre_m,
+            pole.top_m,
+            pole.base_top_m - WHITE_BASE_SEEN_M,
+        )
+        seen: list[BandCentres] = []
+        centres_3d: list[FloatArray] = []  # (2, 3) band-centre points of each seen pole
+        for k in np.flatnonzero((distance > pole.radius_m) & (distance <= self.config.max_range_m)):
+            surface = self.positions[k] - CENTROID_DEPTH_FACTOR * pole.radius_m * towards[k]
+            points = np.array([[*surface, z] for z in heights])
+            cam = (points - position) @ rotation
+            uv, front = project_points(cam, m.fx, m.fy, m.cx, m.cy)
+            if not front.all():
+                continue
+            half_width = m.fx * pole.radius_m / cam[:, 0].min()
+            box = np.array(
+                [uv[:, 0].min() - half_width, uv[2, 1], uv[:, 0].max() + half_width, uv[3, 1]]
+            )
+            margin = self.config.border_margin_px
+            if (
+                box[0] < margin
+                or box[1] < margin
+                or box[2] > m.width - margin
+                or box[3] > m.height - margin
+            ):
+                continue
+            seen.append(BandCentres(landmark_id=self.ids[k], upper=uv[0], lower=uv[1], box=box))
+            centres_3d.append(points[:2])
+        if not seen:
+            return []
+        # line of sight to both band centres: the first body each ray meets must be the pole
+        targets = np.vstack(centres_3d)
+        starts = np.repeat(position[None, :], len(targets), axis=0)
+        _, hit = world.ray_test(starts, starts + (targets - starts) * 1.001)
+        bodies = self.body_ids[[self.ids.index(b.landmark_id) for b in seen]]
+        unblocked = np.all(hit.reshape(-1, 2) == bodies[:, None], axis=1)
+        return [b for b, ok in zip(seen, unblocked, strict=True) if ok]
+
+    def observe(
+        self,
+        world: BulletWorld,
+        position: FloatArray,
+        rotation: FloatArray,
+        rng: np.random.Generator,
+    ) -> tuple[BandCentres, ...]:
+        """The band centres a detector would report: visible poles, thinned by ``recall``, with
+        pixel noise; every pole draws the same number of random numbers."""
+        seen = self.visible(world, position, rotation)
+        ranges = np.array(
+            [
+                np.hypot(*(self.positions[self.ids.index(b.landmark_id)] - position[:2]))
+                for b in seen
+            ]
+        )
+        keep = rng.uniform(size=len(seen)) < self.config.recall(ranges)
+        std = np.array([self.config.pixel_std_u_px, self.config.pixel_std_v_px])
+        noise = rng.normal(0.0, 1.0, size=(len(seen), 2, 2)) * std
+        return tuple(
+            BandCentres(
+                landmark_id=b.landmark_id, upper=b.upper + n[0], lower=b.lower + n[1], box=b.box
+            )
+            for b, k, n in zip(seen, keep, noise, strict=True)
+            if k
+        )
