@@ -58,13 +58,15 @@ class TopDownView:
         cv2.circle(img, self.px(np.zeros(2)), radius, (240, 240, 240), w)
         for post in self.dims.goal_posts():
             cv2.circle(img, self.px(post), 3, (255, 255, 255), -1)
+        # legend in the field's top-left corner, clear of the poles in the border strip
+        corner = self.px(np.array([-self.dims.half_length_m, self.dims.half_width_m]))
         for k, (label, bgr) in enumerate(
             (("true", TRUE_BGR), ("SLAM", SLAM_BGR), ("odometry", ODOM_BGR))
         ):
             cv2.putText(
                 img,
                 label,
-                (8 + 70 * k, self.size[0] - 6),
+                (corner[0] + 6 + 48 * k, corner[1] + 16),
                 cv2.FONT_HERSHEY_SIMPLEX,
                 0.4,
                 bgr,
