@@ -18,6 +18,7 @@ import numpy as np
 
 import spl_env  # noqa: F401  (registers the env ids)
 from agents.evaluate import (
+    env_kwargs_for,
     episode_metrics,
     load_policy,
     parse_overrides,
@@ -45,14 +46,20 @@ def main(argv: list[str] | None = None) -> None:
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument("--out", type=Path, default=Path("outputs/demo"))
-    parser.add_argument("--policy", default="scan")
+    parser.add_argument("--policy", default="scan", help="a baseline name or a model .zip")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--frames", type=int, default=6, help="views in the strip")
     parser.add_argument(
         "--set", nargs="*", default=[], metavar="KEY=VALUE", help="env config overrides"
     )
     args = parser.parse_args(argv)
-    env = gym.make("SPL/ActiveVision-v0", render_mode="rgb_array", **parse_overrides(args.set))
+    if args.frames < 1:
+        parser.error(f"--frames must be >= 1, got {args.frames}")
+    env = gym.make(
+        "SPL/ActiveVision-v0",
+        render_mode="rgb_array",
+        **env_kwargs_for(args.policy, parse_overrides(args.set)),
+    )
     steps = env.get_wrapper_attr("config").max_steps
     record = run_episode(
         env,

@@ -4,8 +4,11 @@
     python -m agents.evaluate --policy runs/ppo/model.zip --episodes 3 --out outputs/eval_ppo
 
 Writes ``metrics.json`` (per episode and mean: return, mean SLAM position error, mean
-odometry-only error, mean pose NEES, landmark error) and ``trajectory.png`` (the first episode:
-true path green, SLAM orange, odometry grey, on the field).
+odometry-only error, mean pose NEES, landmark error, ``null`` where no landmark was mapped) and
+``trajectory.png`` (the first episode: true path green, SLAM orange, odometry grey, on the field).
+
+A model ``.zip`` saved by ``agents.train`` has its ``config.json`` beside it: its ``env_kwargs``
+configure the env the model is evaluated on, and ``--set`` overrides them.
 """
 
 from __future__ import annotations
@@ -89,8 +92,9 @@ def run_episode(env: gym.Env, policy: Policy, seed: int, frame_every: int = 0) -
     return record
 
 
-def episode_metrics(record: EpisodeRecord) -> dict[str, float]:
-    """Summary numbers of one episode (SI units)."""
+def episode_metrics(record: EpisodeRecord) -> dict[str, float | None]:
+    """Summary numbers of one episode (SI units); the landmark error is ``None`` (JSON ``null``)
+    when no landmark was mapped."""
     slam_err = [
         position_error(t, e) for t, e in zip(record.true_poses, record.slam_poses, strict=True)
     ]
@@ -110,7 +114,7 @@ def episode_metrics(record: EpisodeRecord) -> dict[str, float]:
         "mean_odometry_error_m": float(np.mean(odom_err)),
         "final_odometry_error_m": float(odom_err[-1]),
         "mean_pose_nees": float(np.mean(nees)),
-        "mean_landmark_error_m": float(np.mean(lm)) if len(lm) else float("nan"),
+        "mean_landmark_error_m": float(np.mean(lm)) if len(lm) else None,
         "landmarks_mapped": len(lm),
         "mean_step_ms": 1000.0 * float(np.mean(record.step_seconds[1:])),
         "steps": len(record.true_poses) - 1,
@@ -136,9 +140,13 @@ def trajectory_plot(dims: FieldDimensions, record: EpisodeRecord) -> np.ndarray:
     return img
 
 
-def summarise(per_episode: list[dict[str, float]]) -> dict[str, float]:
-    """Mean of each metric over episodes."""
-    return {k: float(np.nanmean([m[k] for m in per_episode])) for k in per_episode[0]}
+def summarise(per_episode: list[dict[str, float | None]]) -> dict[str, float | None]:
+    """Mean of each metric over the episodes that have it (not ``None``); ``None`` if none has."""
+    out: dict[str, float | None] = {}
+    for key in per_episode[0]:
+        values = [v for m in per_episode if (v := m[key]) is not None]
+        out[key] = float(np.mean(values)) if values else None
+    return out
 
 
 def parse_overrides(pairs: list[str]) -> dict[str, Any]:
@@ -153,6 +161,20 @@ def parse_overrides(pairs: list[str]) -> dict[str, Any]:
         except json.JSONDecodeError:
             out[key] = value
     return out
+
+
+def env_kwargs_for(policy: str, overrides: dict[str, Any]) -> dict[str, Any]:
+    """Env kwargs to evaluate ``policy`` with: the ``env_kwargs`` of the ``config.json`` that
+    ``agents.train`` saved beside a model ``.zip`` (if there is one), updated by ``overrides``."""
+    if not policy.endswith(".zip"):
+        return dict(overrides)
+    config_path = Path(policy).with_name("config.json")
+    if not config_path.is_file():
+        return dict(overrides)
+    config = json.loads(config_path.read_text())
+    if not isinstance(config, dict) or not isinstance(config.get("env_kwargs"), dict):
+        raise ValueError(f"{config_path} has no 'env_kwargs' object: not a training config")
+    return {**config["env_kwargs"], **overrides}
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -172,7 +194,9 @@ def main(argv: list[str] | None = None) -> None:
         help="env config overrides, e.g. --set episode_s=30 body_behaviour=square",
     )
     args = parser.parse_args(argv)
-    env = gym.make(args.env, **parse_overrides(args.set))
+    if args.episodes < 1:
+        parser.error(f"--episodes must be >= 1, got {args.episodes}")
+    env = gym.make(args.env, **env_kwargs_for(args.policy, parse_overrides(args.set)))
     policy = load_policy(args.policy, env.get_wrapper_attr("config"))
     args.out.mkdir(parents=True, exist_ok=True)
     per_episode = []

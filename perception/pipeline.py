@@ -69,6 +69,12 @@ class PerceptionPipeline:
 
     def _detect(self, frame: SensorFrame) -> tuple[LandmarkObservation, ...]:
         """Pole sightings from the image, or from band centres in the geometric camera mode."""
+        if (frame.image is None) == (frame.band_centres is None):
+            raise ValueError(
+                "frame must carry exactly one of image and band_centres, got "
+                f"image={'set' if frame.image is not None else None}, "
+                f"band_centres={'set' if frame.band_centres is not None else None}"
+            )
         if frame.image is not None:
             return tuple(self.detector.detect(frame.image, frame.camera_state))
         found = (

@@ -69,7 +69,10 @@ class PoleGeometry:
 class CameraModel:
     """Pinhole intrinsics of an undistorted camera: image size (px) and horizontal FOV (deg).
 
-    Square pixels; the principal point is the image centre.
+    Square pixels; the principal point is ``(width / 2, height / 2)``. Pixel (column i, row j) is
+    centred at ``(u, v) = (i, j)``. PyBullet's tiny renderer agrees along columns; its rows sit up
+    to one pixel higher (``tests/spl_env/test_world.py``), which moves both band centres of a
+    pole alike and so hardly its range.
     """
 
     width: int = 320

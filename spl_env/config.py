@@ -13,6 +13,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
+import types
+import typing
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -67,67 +70,135 @@ class EnvConfig:
         return round(self.episode_s / self.sim.control_dt_s)
 
 
-def _field_paths(config: Any, prefix: str = "") -> dict[str, list[str]]:
-    """Map each field name to the dotted paths where it occurs in a nested config."""
+def _config_class(tp: Any) -> type | None:
+    """The config dataclass in the annotation ``tp`` (``X`` or ``X | None``), if any."""
+    is_union = typing.get_origin(tp) in (typing.Union, types.UnionType)
+    options = typing.get_args(tp) if is_union else (tp,)
+    return next((t for t in options if isinstance(t, type) and dataclasses.is_dataclass(t)), None)
+
+
+def _field_paths(cls: type, prefix: str = "") -> dict[str, list[str]]:
+    """Map each field name to the dotted paths where it occurs in the config class ``cls``.
+
+    Walks the annotated types, so optional parts that are None by default (``sim.laser``)
+    count too and whether a name is unique does not depend on the current values.
+    """
     paths: dict[str, list[str]] = {}
-    for f in dataclasses.fields(config):
+    hints = typing.get_type_hints(cls)
+    for f in dataclasses.fields(cls):
         path = f"{prefix}{f.name}"
         paths.setdefault(f.name, []).append(path)
-        value = getattr(config, f.name)
-        if dataclasses.is_dataclass(value) and not isinstance(value, type):
-            for name, sub in _field_paths(value, f"{path}.").items():
+        sub_class = _config_class(hints[f.name])
+        if sub_class is not None:
+            for name, sub in _field_paths(sub_class, f"{path}.").items():
                 paths.setdefault(name, []).extend(sub)
     return paths
 
 
-def _coerce(path: str, current: Any, value: Any) -> Any:
-    """``value`` as the type of the field's ``current`` value, or a TypeError naming ``path``."""
-    if current is None or value is None:  # optional parts, e.g. laser=LaserConfig() or sonar=None
+class _MismatchError(Exception):
+    """A value does not fit a type annotation."""
+
+
+def _convert(tp: Any, value: Any) -> Any:
+    """``value`` as the annotation ``tp`` asks (lists to tuples, numbers to int or float)."""
+    if typing.get_origin(tp) in (typing.Union, types.UnionType):
+        for option in typing.get_args(tp):
+            try:
+                return _convert(option, value)
+            except _MismatchError:
+                pass
+        raise _MismatchError
+    if tp is tuple or typing.get_origin(tp) is tuple:
+        if not isinstance(value, (tuple, list)):
+            raise _MismatchError
+        args = typing.get_args(tp)
+        if not args or args[-1] is Ellipsis:  # tuple or tuple[X, ...]: any length
+            args = (args[0] if args else Any,) * len(value)
+        if len(args) != len(value):
+            raise _MismatchError
+        return tuple(_convert(arg, item) for arg, item in zip(args, value, strict=True))
+    if tp is Any:
         return value
-    expected = type(current)
-    if isinstance(current, bool) or not isinstance(current, (int, float, tuple)):
-        ok = isinstance(value, expected)
-    elif isinstance(current, tuple):
-        ok = isinstance(value, (tuple, list))
-        value = tuple(value) if ok else value
-    else:  # int or float; an int is fine where a float is expected, a bool is not a number here
-        ok = isinstance(value, (int, float) if expected is float else int)
-        ok = ok and not isinstance(value, bool)
-        value = float(value) if ok and expected is float else value
-    if not ok:
+    if isinstance(value, bool) and tp is not bool:  # a bool is an int to Python, not here
+        raise _MismatchError
+    if tp is float and isinstance(value, numbers.Real):  # numpy scalars and ints included
+        return float(value)
+    if tp is int and isinstance(value, numbers.Integral):
+        return int(value)
+    if isinstance(tp, type) and isinstance(value, tp):  # str, bool, a config, None
+        return value
+    raise _MismatchError
+
+
+def _coerce(path: str, tp: Any, value: Any) -> Any:
+    """``value`` converted to the field's annotation ``tp``, or a TypeError naming ``path``."""
+    try:
+        return _convert(tp, value)
+    except _MismatchError:
+        name = tp.__name__ if isinstance(tp, type) else str(tp)
         raise TypeError(
-            f"config field {path!r} expects {expected.__name__}, got {type(value).__name__} "
-            f"{value!r}"
-        )
-    return value
+            f"config field {path!r} expects {name}, got {type(value).__name__} {value!r}"
+        ) from None
 
 
 def _apply(config: Any, tree: dict[str, Any], prefix: str) -> Any:
     """Replace the fields named in ``tree`` (nested dicts for nested configs) in one go per
-    dataclass, innermost first, so that validation sees every change together."""
+    dataclass, innermost first, so that validation sees every change together. Sub-fields of
+    an optional config that is None are set on its defaults."""
+    hints = typing.get_type_hints(type(config))
     changes = {}
     for name, value in tree.items():
         path = f"{prefix}{name}"
         if name not in {f.name for f in dataclasses.fields(config)}:
-            raise TypeError(f"{type(config).__name__} has no field {name!r} (in {path!r})")
-        current = getattr(config, name)
+            raise TypeError(
+                f"unknown config field {path!r}: {type(config).__name__} has no {name!r}"
+            )
         if isinstance(value, dict):
-            if not dataclasses.is_dataclass(current):
+            sub_class = _config_class(hints[name])
+            if sub_class is None:
                 raise TypeError(f"config field {path!r} has no sub-fields to set")
-            changes[name] = _apply(current, value, f"{path}.")
+            current = getattr(config, name)
+            changes[name] = _apply(sub_class() if current is None else current, value, f"{path}.")
         else:
-            changes[name] = _coerce(path, current, value)
+            changes[name] = _coerce(path, hints[name], value)
     return dataclasses.replace(config, **changes)
+
+
+def _insert(tree: dict[str, Any], path: str, value: Any) -> None:
+    """Put ``value`` at the dotted ``path`` of ``tree``, a dict value spread into its sub-fields
+    (never stored, so the caller's dicts are not changed); a TypeError if a field is set twice.
+    """
+    *parents, leaf = path.split(".")
+    node = tree
+    for i, parent in enumerate(parents):
+        node = node.setdefault(parent, {})
+        if not isinstance(node, dict):
+            whole = ".".join(parents[: i + 1])
+            raise TypeError(f"config field {whole!r} is set both whole and by sub-field")
+    if isinstance(value, dict):
+        if not isinstance(node.setdefault(leaf, {}), dict):
+            raise TypeError(f"config field {path!r} is set both whole and by sub-field")
+        for name, sub in value.items():
+            _insert(tree, f"{path}.{name}", sub)
+    elif isinstance(node.get(leaf), dict):
+        raise TypeError(f"config field {path!r} is set both whole and by sub-field")
+    elif leaf in node:
+        raise TypeError(f"config field {path!r} is set twice")
+    else:
+        node[leaf] = value
 
 
 def with_overrides(config: EnvConfig, **overrides: Any) -> EnvConfig:
     """A copy of ``config`` with fields replaced by name (unique) or dotted path.
 
     All overrides are applied together, so related fields (``physics_dt_s`` and
-    ``control_dt_s``) can change in any order. Values must have the field's type (an int is
-    accepted for a float); a wrong type raises ``TypeError`` naming the field.
+    ``control_dt_s``) can change in any order. Values must fit the field's annotation: an int
+    is accepted for a float, numpy scalars for numbers, lists for tuples, None only where the
+    field is optional; a dict sets sub-fields of a nested config (on its defaults if it is
+    None). A wrong type, an unknown or ambiguous name, or a field set twice (twice as a leaf,
+    or whole and by sub-field) raises ``TypeError`` naming the field.
     """
-    paths = _field_paths(config)
+    paths = _field_paths(type(config))
     tree: dict[str, Any] = {}
     for key, value in overrides.items():
         if "." in key:
@@ -141,13 +212,5 @@ def with_overrides(config: EnvConfig, **overrides: Any) -> EnvConfig:
                     f"config field {key!r} is ambiguous; use one of {found} as a dotted path"
                 )
             path = found[0]
-        *parents, leaf = path.split(".")
-        node = tree
-        for parent in parents:
-            node = node.setdefault(parent, {})
-            if not isinstance(node, dict):
-                raise TypeError(f"config field {parent!r} is set both whole and by sub-field")
-        if isinstance(node.get(leaf), dict):
-            raise TypeError(f"config field {path!r} is set both whole and by sub-field")
-        node[leaf] = value
+        _insert(tree, path, value)
     return _apply(config, tree, "")

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from perception.geometry import FloatArray, wrap_angle
 from perception.types import PoleCode, SensorFrame
 from spl_env.behaviours import WalkerConfig, WaypointWalker
-from spl_env.sensors.camera import Camera, CameraConfig, EpisodeLighting
+from spl_env.sensors.camera import Camera, CameraConfig, EpisodeLighting, blur_length_px
 from spl_env.sensors.geometric_camera import GeometricCameraConfig, GeometricPoleCamera
 from spl_env.sensors.laser import Laser, LaserConfig
 from spl_env.sensors.odometry import OdometryConfig, WalkOdometry
@@ -143,6 +143,7 @@ class SplSimulation:
         )
         self._initial_state = self.world.save_state()
         self._rng: np.random.Generator | None = None  # the episode's, from reset()
+        self.last_yaw_rate_rps = 0.0
         self._walkers: list[WaypointWalker] = []
         self._others_blocked = [False] * len(self.others)
         self._lighting = EpisodeLighting.default()
@@ -254,6 +255,7 @@ class SplSimulation:
         """Render the camera and read odometry, sonar and laser; returns frame and timings."""
         if self._rng is None:
             raise RuntimeError("call SplSimulation.reset() before stepping")
+        self.last_yaw_rate_rps = yaw_rate  # the camera's turn rate this frame (rad/s)
         t0 = time.perf_counter()
         position, rotation = self.robot.camera_pose_world()
         image, band_centres = None, None
@@ -262,7 +264,12 @@ class SplSimulation:
                 self.world, position, rotation, self._lighting, self._rng, yaw_rate_rps=yaw_rate
             )
         else:
-            band_centres = self.geometric_camera.observe(self.world, position, rotation, self._rng)
+            blur = blur_length_px(
+                yaw_rate, self.config.camera.exposure_time_s, self.config.camera.model.fx
+            )
+            band_centres = self.geometric_camera.observe(
+                self.world, position, rotation, self._rng, blur_px=blur
+            )
         t1 = time.perf_counter()
         self_id = self.world.body(SELF)
         sonar = (

@@ -1,8 +1,9 @@
 """Seed 000's colour-filter detector of the two-coloured landmark poles (§3.3).
 
 A pole is a white base with two colour bands of equal height on top, one of them pink. Per frame
-(an (H, W, 3) uint8 RGB image; pixel (column i, row j) covers [i, i+1) x [j, j+1), so its centre
-is at (i + 0.5, j + 0.5)):
+(an (H, W, 3) uint8 RGB image; while searching, pixel (column i, row j) covers
+[i, i+1) x [j, j+1); measured centres are then moved by -0.5 px into the camera model's
+coordinates, where pixel (i, j) is centred at (u, v) = (i, j) as PyBullet renders):
 
 1. one HSV conversion and ``inRange`` masks (OpenCV HSV: H 0-179, S and V 0-255); the
    connected components of the pink mask are the pink segments. Those smaller than
@@ -278,8 +279,9 @@ class ColourPoleDetector:
             box = np.concatenate(
                 [np.minimum(upper.box[:2], lower.box[:2]), np.maximum(upper.box[2:], lower.box[2:])]
             )
+            # from search coordinates (pixel i spans [i, i+1)) to the camera model's (centred on i)
             observation = self.observe_band_centres(
-                landmark_id, upper.centre, lower.centre, box, camera_state
+                landmark_id, upper.centre - 0.5, lower.centre - 0.5, box - 0.5, camera_state
             )
             if observation is not None:
                 best[landmark_id] = (area, observation)

@@ -161,14 +161,20 @@ class Camera:
             image = _window_glare(
                 image, forward, lighting.window_direction, lighting.window_strength, m
             )
-        blur_px = abs(yaw_rate_rps) * self.config.exposure_time_s * m.fx
-        if blur_px >= 1.5:
+        blur_px = blur_length_px(yaw_rate_rps, self.config.exposure_time_s, m.fx)
+        if blur_px > 0:
             k = round(blur_px)
             image = np.asarray(cv2.blur(image, (k, 1)), dtype=np.float32)
         if self.config.noise_std > 0:
             noise = rng.standard_normal(size=image.shape, dtype=np.float32)
             image += np.float32(self.config.noise_std) * noise
         return np.clip(image, 0, 255).astype(np.uint8), labels
+
+
+def blur_length_px(yaw_rate_rps: float, exposure_time_s: float, fx: float) -> float:
+    """Horizontal motion blur (px) of a frame, as :class:`Camera` applies it: none below 1.5 px."""
+    blur = abs(yaw_rate_rps) * exposure_time_s * fx
+    return blur if blur >= 1.5 else 0.0
 
 
 def _window_glare(

@@ -3,13 +3,14 @@
 Instead of rendering a frame and segmenting it, each pole's two band centres are projected
 through the true camera pose (gait sway included, which the robot does not sense), kept if the
 whole pole outline lies inside the image and no other body blocks the line of sight (ray casts),
-and disturbed as the rendered pipeline is: a detection is missed with a range-dependent chance
-and each centre gets Gaussian pixel noise, separately along columns and rows. Perception then
-measures range and bearing with the colour filter's own model
+and disturbed as the rendered pipeline is: a detection is missed with a chance that grows with
+the motion blur across the pole, and each centre gets Gaussian pixel noise, separately along
+columns and rows. The ids are those of the true poles: this mode makes no false detections.
+Perception then measures range and bearing with the colour filter's own model
 (:meth:`perception.vision.ColourPoleDetector.observe_band_centres`), so both modes produce the
 same detection types.
 
-``recall_by_range`` and the pixel noise are fitted to the rendered pipeline by
+``recall_by_smear`` and the pixel noise are fitted to the rendered pipeline by
 ``benchmarks/fit_geometric_camera.py``, which writes ``benchmarks/results/geometric_camera.json``.
 """
 
@@ -32,28 +33,44 @@ WHITE_BASE_SEEN_M = 0.05  # the detector checks this much of the white base belo
 
 @dataclass(frozen=True, kw_only=True)
 class GeometricCameraConfig:
-    """Noise of the geometric camera mode, fitted to the rendered colour-filter pipeline."""
+    """Noise of the geometric camera mode, fitted to the rendered colour-filter pipeline.
 
-    # Fitted on 1160 visible poles (benchmarks/results/geometric_camera.json): rendered recall
-    # 1.0 below 2 m, 0.87 at 2-4 m, 0.86 at 4-6 m, 0.56 at 6-8 m; rendered RMS range error
-    # 0.134 m and bearing 0.0028 rad, which these pixel noises reproduce (0.126 m, 0.0028 rad).
-    # (upper range bound m, chance a fully visible pole nearer than it is detected)
-    recall_by_range: tuple[tuple[float, float], ...] = ((2.0, 1.0), (6.0, 0.86), (8.0, 0.56))
-    pixel_std_u_px: float = 1.15  # Gaussian noise on each band centre's column (px)
+    A pole is lost mostly to motion blur: ``recall_by_smear`` gives the chance that a fully
+    visible pole is detected against its smear, the blur length over the pole's width in pixels
+    (both as the rendered camera would show them).
+    """
+
+    # Fitted by benchmarks/fit_geometric_camera.py on 1684 visible poles under fixed, scanning
+    # and random heads (benchmarks/results/geometric_camera.json): rendered recall 0.98, 0.97,
+    # 0.91, 0.35 and 0 for smear below 0.25, 0.5, 1, 2 and beyond; rendered RMS errors 0.130 m
+    # and 0.0022 rad, which these pixel noises reproduce (0.138 m, 0.0022 rad).
+    # (upper bound of blur px / pole width px, detection chance below it); beyond the last: 0
+    recall_by_smear: tuple[tuple[float, float], ...] = (
+        (0.25, 0.98),
+        (0.5, 0.97),
+        (1.0, 0.91),
+        (2.0, 0.35),
+    )
+    pixel_std_u_px: float = 0.6  # Gaussian noise on each band centre's column (px)
     pixel_std_v_px: float = 0.25  # Gaussian noise on each band centre's row (px)
+    max_range_m: float = 8.0  # no detection beyond (as ColourFilterConfig.max_range_m)
     border_margin_px: float = 1.0  # the outline must stay this far inside the image
 
     def __post_init__(self) -> None:
-        bounds = [b for b, _ in self.recall_by_range]
-        if not bounds or any(b <= a for a, b in zip([0.0, *bounds], bounds, strict=False)):
+        bounds = [b for b, _ in self.recall_by_smear]
+        if (
+            not bounds
+            or not all(math.isfinite(b) for b in bounds)
+            or any(b <= a for a, b in zip([0.0, *bounds], bounds, strict=False))
+        ):
             raise ValueError(
-                "GeometricCameraConfig.recall_by_range needs increasing positive range bounds, "
-                f"got {self.recall_by_range}"
+                "GeometricCameraConfig.recall_by_smear needs finite increasing positive bounds, "
+                f"got {self.recall_by_smear}"
             )
-        if not all(0.0 <= r <= 1.0 for _, r in self.recall_by_range):
+        if not all(0.0 <= r <= 1.0 for _, r in self.recall_by_smear):
             raise ValueError(
-                f"GeometricCameraConfig.recall_by_range recalls must be in [0, 1], "
-                f"got {self.recall_by_range}"
+                "GeometricCameraConfig.recall_by_smear recalls must be in [0, 1], "
+                f"got {self.recall_by_smear}"
             )
         for name in ("pixel_std_u_px", "pixel_std_v_px", "border_margin_px"):
             value = getattr(self, name)
@@ -61,17 +78,22 @@ class GeometricCameraConfig:
                 raise ValueError(
                     f"GeometricCameraConfig.{name} must be finite and >= 0, got {value}"
                 )
+        if not (math.isfinite(self.max_range_m) and self.max_range_m > 0):
+            raise ValueError(
+                f"GeometricCameraConfig.max_range_m must be finite and > 0, got {self.max_range_m}"
+            )
 
-    @property
-    def max_range_m(self) -> float:
-        """Beyond the last range bound nothing is detected."""
-        return self.recall_by_range[-1][0]
+    def recall(self, smear: FloatArray) -> FloatArray:
+        """Detection chance (N,) of fully visible poles with ``smear`` (N,) blur / width."""
+        bounds = np.array([b for b, _ in self.recall_by_smear])
+        recalls = np.array([r for _, r in self.recall_by_smear] + [0.0])
+        return recalls[np.searchsorted(bounds, smear, side="right")]
 
-    def recall(self, range_m: FloatArray) -> FloatArray:
-        """Detection chance (N,) of fully visible poles at ``range_m`` (N,) metres."""
-        bounds = np.array([b for b, _ in self.recall_by_range])
-        recalls = np.array([r for _, r in self.recall_by_range] + [0.0])
-        return recalls[np.searchsorted(bounds, range_m, side="right")]
+
+def smear(bands: list[BandCentres], blur_px: float) -> FloatArray:
+    """Blur length over each pole's width in the image (N,), from the bands' boxes (px)."""
+    widths = np.array([max(b.box[2] - b.box[0], 1e-6) for b in bands])
+    return blur_px / widths
 
 
 class GeometricPoleCamera:
@@ -153,17 +175,12 @@ class GeometricPoleCamera:
         position: FloatArray,
         rotation: FloatArray,
         rng: np.random.Generator,
+        blur_px: float = 0.0,
     ) -> tuple[BandCentres, ...]:
-        """The band centres a detector would report: visible poles, thinned by ``recall``, with
-        pixel noise; every pole draws the same number of random numbers."""
+        """The band centres a detector would report: the visible poles, each kept with its
+        detection chance under ``blur_px`` of horizontal motion blur, with pixel noise."""
         seen = self.visible(world, position, rotation)
-        ranges = np.array(
-            [
-                np.hypot(*(self.positions[self.ids.index(b.landmark_id)] - position[:2]))
-                for b in seen
-            ]
-        )
-        keep = rng.uniform(size=len(seen)) < self.config.recall(ranges)
+        keep = rng.uniform(size=len(seen)) < self.config.recall(smear(seen, blur_px))
         std = np.array([self.config.pixel_std_u_px, self.config.pixel_std_v_px])
         noise = rng.normal(0.0, 1.0, size=(len(seen), 2, 2)) * std
         return tuple(

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 from pathlib import Path
 
 import gymnasium as gym
@@ -11,8 +12,15 @@ import numpy as np
 import pytest
 
 from agents.baselines import FixedHead, HeadScan, LookAtStalest, head_action
+from agents.demo import main as demo_main
+from agents.evaluate import (
+    EpisodeRecord,
+    env_kwargs_for,
+    episode_metrics,
+    parse_overrides,
+    summarise,
+)
 from agents.evaluate import main as evaluate_main
-from agents.evaluate import parse_overrides
 from agents.train import default_config_path, load_config, train
 from spl_env.config import EnvConfig
 from spl_env.envs.active_vision import ActiveVisionEnv
@@ -78,16 +86,35 @@ def test_fixed_head_and_override_parsing() -> None:
     }
 
 
-def test_ppo_learn_2048_steps_smoke(tmp_path: Path) -> None:
+def _strict_json(path: Path) -> dict:
+    """``path`` parsed as standard JSON: NaN and Infinity (which Python writes) are refused."""
+
+    def refuse(token: str) -> None:
+        raise ValueError(f"{path} holds {token}: not valid JSON")
+
+    return json.loads(path.read_text(), parse_constant=refuse)
+
+
+@pytest.fixture(scope="module")
+def trained_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A run directory with ``model.zip`` and ``config.json`` after 2048 PPO steps (~60 s)."""
     config = load_config(default_config_path("SPL/ActiveVision-v0"))
     config["env_kwargs"] = {"episode_s": 20.0}
     config["ppo"] = {**config["ppo"], "n_steps": 1024, "n_epochs": 1}
-    path = train("SPL/ActiveVision-v0", config, 2048, tmp_path / "run", seed=0)
-    saved = json.loads((tmp_path / "run" / "config.json").read_text())
-    assert saved["timesteps"] == 2048
+    out = tmp_path_factory.mktemp("ppo") / "run"
+    train("SPL/ActiveVision-v0", config, 2048, out, seed=0)
+    return out
+
+
+def test_ppo_learn_2048_steps_smoke(trained_run: Path) -> None:
+    """Plumbing only: PPO.learn runs 2048 steps on the env, saves, loads and acts in the action
+    space. Nothing here says whether the policy got any better."""
+    saved = json.loads((trained_run / "config.json").read_text())
+    assert saved["timesteps"] == 2048 and saved["env_kwargs"] == {"episode_s": 20.0}
+    assert "algorithm" not in saved  # the shipped config holds only keys train() reads
     from stable_baselines3 import PPO
 
-    model = PPO.load(path, device="cpu")
+    model = PPO.load(trained_run / "model.zip", device="cpu")
     assert model.num_timesteps == 2048
     env = gym.make("SPL/ActiveVision-v0", episode_s=1.0)
     obs, _ = env.reset(seed=0)
@@ -96,14 +123,83 @@ def test_ppo_learn_2048_steps_smoke(tmp_path: Path) -> None:
     env.close()
 
 
+def test_evaluate_uses_the_env_kwargs_saved_beside_the_model(
+    trained_run: Path, tmp_path: Path
+) -> None:
+    run = tmp_path / "run"
+    run.mkdir()
+    shutil.copy(trained_run / "model.zip", run / "model.zip")
+    (run / "config.json").write_text(json.dumps({"env_kwargs": {"episode_s": 1.0}}))
+    model = str(run / "model.zip")
+    evaluate_main(["--policy", model, "--episodes", "1", "--out", str(tmp_path / "a")])
+    assert _strict_json(tmp_path / "a" / "metrics.json")["episodes"][0]["steps"] == 10
+    evaluate_main(
+        ["--policy", model, "--episodes", "1", "--out", str(tmp_path / "b"), "--set", "episode_s=2"]
+    )
+    assert _strict_json(tmp_path / "b" / "metrics.json")["episodes"][0]["steps"] == 20
+
+
+def test_env_kwargs_for_merges_the_saved_config_under_the_overrides(tmp_path: Path) -> None:
+    model = str(tmp_path / "model.zip")
+    assert env_kwargs_for(model, {"episode_s": 3}) == {"episode_s": 3}  # no config.json beside it
+    env_kwargs = {"episode_s": 2.0, "body_behaviour": "square"}
+    config = {"policy": "MultiInputPolicy", "ppo": {}, "env_kwargs": env_kwargs}
+    (tmp_path / "config.json").write_text(json.dumps(config))
+    assert env_kwargs_for(model, {}) == {"episode_s": 2.0, "body_behaviour": "square"}
+    assert env_kwargs_for(model, {"episode_s": 3}) == {"episode_s": 3, "body_behaviour": "square"}
+    assert env_kwargs_for("scan", {"episode_s": 3}) == {"episode_s": 3}  # baselines: no config
+    (tmp_path / "config.json").write_text(json.dumps({"policy": "MultiInputPolicy"}))
+    with pytest.raises(ValueError, match="env_kwargs"):
+        env_kwargs_for(model, {})
+
+
 def test_evaluate_writes_metrics_and_plot(tmp_path: Path) -> None:
     evaluate_main(
-        ["--policy", "scan", "--episodes", "1", "--out", str(tmp_path), "--set", "episode_s=3"]
+        ["--policy", "scan", "--episodes", "2", "--out", str(tmp_path), "--set", "episode_s=2"]
     )
-    result = json.loads((tmp_path / "metrics.json").read_text())
-    episode = result["episodes"][0]
-    assert episode["steps"] == 30
-    assert result["mean"]["mean_position_error_m"] == episode["mean_position_error_m"]
+    result = _strict_json(tmp_path / "metrics.json")
+    first, second = result["episodes"]
+    assert first["steps"] == second["steps"] == 20
+    assert first["mean_position_error_m"] != second["mean_position_error_m"]  # different seeds
+    for key in ("return", "mean_position_error_m", "mean_odometry_error_m", "mean_pose_nees"):
+        assert result["mean"][key] == pytest.approx((first[key] + second[key]) / 2)
     assert (tmp_path / "trajectory.png").stat().st_size > 0
     with pytest.raises(ValueError, match="policy"):
         evaluate_main(["--policy", "nonsense", "--episodes", "1", "--out", str(tmp_path)])
+
+
+def test_no_mapped_landmark_is_null_not_nan() -> None:
+    pose = np.zeros(3)
+    record = EpisodeRecord(
+        true_poses=[pose, pose],
+        slam_poses=[pose, pose],
+        odometry_poses=[pose, pose],
+        pose_covs=[np.eye(3), np.eye(3)],
+        step_seconds=[0.0, 0.01],
+        final_info={
+            "ground_truth": {"landmark_ids": np.array([0]), "landmarks": np.array([[1.0, 1.0]])},
+            "perception": {"landmark_ids": np.zeros(0, np.int64), "landmarks": np.zeros((0, 2))},
+        },
+    )
+    metrics = episode_metrics(record)
+    assert metrics["landmarks_mapped"] == 0 and metrics["mean_landmark_error_m"] is None
+    assert "null" in json.dumps(metrics, allow_nan=False)
+    mapped = {**metrics, "mean_landmark_error_m": 0.3}
+    assert summarise([metrics, metrics])["mean_landmark_error_m"] is None
+    assert summarise([metrics, mapped])["mean_landmark_error_m"] == pytest.approx(0.3)
+
+
+@pytest.mark.parametrize(
+    "main, argv, flag",
+    [
+        (evaluate_main, ["--episodes", "0"], "--episodes"),
+        (demo_main, ["--frames", "0"], "--frames"),
+    ],
+)
+def test_cli_counts_below_one_are_usage_errors(
+    main, argv: list[str], flag: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        main([*argv, "--out", str(tmp_path)])
+    assert exit_info.value.code == 2
+    assert f"{flag} must be >= 1" in capsys.readouterr().err

@@ -86,7 +86,9 @@ def paint_pole(
     for z0, z1, rgb in sorted(parts, key=lambda p: -abs(0.5 * (p[0] + p[1]) - height)):
         uv = part_outline(state, np.asarray(xy), z0, z1)
         # OpenCV puts pixel centres on integers, ours on half-integers; 4 fractional bits
-        hull = cv2.convexHull(np.round((uv - 0.5) * 16).astype(np.int32))
+        hull = cv2.convexHull(
+            np.round(uv * 16).astype(np.int32)
+        )  # OpenCV centres pixels on integers
         cv2.fillConvexPoly(image, hull, rgb, shift=4)
 
 

@@ -17,12 +17,15 @@ BUILDER = ObservationBuilder(
 )
 
 
-def _output(pose: np.ndarray, time_s: float = 10.0) -> PerceptionOutput:
+def _output(
+    pose: np.ndarray, time_s: float = 10.0, landmark_offset: tuple[float, float] = (0.0, 3.0)
+) -> PerceptionOutput:
+    """Landmark 2 at ``landmark_offset`` (field frame) from the pose: by default 3 m to +y."""
     slam = SlamEstimate(
         pose=pose,
         pose_cov=np.diag([0.25, 0.01, 0.04]),
         landmark_ids=np.array([2], dtype=np.int64),
-        landmarks=np.array([[pose[0], pose[1] + 3.0]]),  # 3 m to the robot's left when theta=0
+        landmarks=np.array([[pose[0] + landmark_offset[0], pose[1] + landmark_offset[1]]]),
         landmark_covs=np.diag([0.09, 0.16])[None],
     )
     return PerceptionOutput(
@@ -49,6 +52,16 @@ def test_values_match_hand_computation() -> None:
     assert obs["head_angles"][1] == pytest.approx(4.5 / 34.0, abs=1e-6)
     assert obs["time_fraction"][0] == pytest.approx(10.0 / 60.0)
     assert BUILDER.space().contains(obs)
+
+
+def test_bearing_is_in_the_robot_frame_not_the_field_frame() -> None:
+    # facing +y (theta = pi/2), a landmark 3 m towards field +x is on the robot's right
+    output = _output(np.array([0.0, 0.0, math.pi / 2]), landmark_offset=(3.0, 0.0))
+    obs = BUILDER.build(output, np.zeros(2), None)
+    assert obs["landmarks_cos_bearing"][2] == pytest.approx(0.0, abs=1e-6)
+    assert obs["landmarks_sin_bearing"][2] == pytest.approx(-1.0)
+    assert obs["landmarks_range"][2] == pytest.approx(0.5)  # 3 / (3 + 3)
+    np.testing.assert_allclose(obs["self_pose_field"], [0.0, 0.0, 0.0, 1.0], atol=1e-6)
 
 
 def test_far_estimate_saturates_inside_the_box() -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -16,9 +17,11 @@ def test_camera_turn_rate_is_wrapped_across_pi(monkeypatch: pytest.MonkeyPatch) 
     rates: list[float] = []
     render = sim.camera.render
 
-    def spy(*args, yaw_rate_rps: float = 0.0, **kwargs):
+    def spy(
+        world: Any, position: Any, rotation: Any, lighting: Any, rng: Any, yaw_rate_rps: float = 0.0
+    ) -> Any:
         rates.append(yaw_rate_rps)
-        return render(*args, yaw_rate_rps=yaw_rate_rps, **kwargs)
+        return render(world, position, rotation, lighting, rng, yaw_rate_rps=yaw_rate_rps)
 
     monkeypatch.setattr(sim.camera, "render", spy)
     sim.reset(np.random.default_rng(0), np.array([0.0, 0.0, math.pi - 0.02]))
@@ -27,18 +30,29 @@ def test_camera_turn_rate_is_wrapped_across_pi(monkeypatch: pytest.MonkeyPatch) 
     sim.close()
     assert sim.robot.pose[2] < 0  # it did cross
     assert max(abs(r) for r in rates) <= 0.5 + 1e-9
+    # reset, then the 2 rad/s^2 acceleration limit ramps 0.2, 0.4 up to the commanded 0.5 rad/s
+    assert rates[:4] == pytest.approx([0.0, 0.2, 0.4, 0.5])
+    assert rates[-1] == pytest.approx(0.5)
 
 
-def test_robots_never_overlap() -> None:
-    sim = SplSimulation(SimConfig(n_other_robots=4))
-    sim.reset(np.random.default_rng(3), np.array([0.0, 0.0, 0.0]))
+def test_walking_into_a_robot_blocks_without_overlap_while_odometry_slips() -> None:
+    sim = SplSimulation(SimConfig(n_other_robots=1))
+    sim.reset(np.random.default_rng(0), np.array([0.0, 0.0, 0.0]))
+    sim.others[0].place(np.array([0.4, 0.0, math.pi]))  # 0.4 m straight ahead, facing us
     r = sim.config.robot.body_radius_m
-    for _ in range(100):
-        state, _, _ = sim.step(np.array([0.25, 0.0, 0.2]), np.zeros(2))
-        xy = np.vstack([state.robot_pose[:2], state.robots[:, :2]])
-        d = np.hypot(*(xy[:, None, :] - xy[None, :, :]).transpose(2, 0, 1))
-        assert d[np.triu_indices(len(xy), 1)].min() >= 2 * r - 1e-9
+    blocked_steps, odometry_forward_while_blocked = 0, 0.0
+    for _ in range(20):
+        before = sim.robot.pose.copy()
+        state, frame, _ = sim.step(np.array([0.25, 0.0, 0.0]), np.zeros(2))
+        assert math.dist(state.robot_pose[:2], state.robots[0, :2]) >= 2 * r - 1e-9
+        if state.blocked:
+            blocked_steps += 1
+            np.testing.assert_allclose(state.robot_pose, before)  # the body did not move...
+            odometry_forward_while_blocked += float(frame.odometry_delta[0])
     sim.close()
+    assert blocked_steps >= 5  # 0.1 m of gap closes within ~7 steps at <= 0.25 m/s
+    # ...but the walk engine believes it stepped, so odometry keeps reporting forward motion
+    assert odometry_forward_while_blocked > 0.02
 
 
 def test_overrides_apply_together_in_any_order() -> None:
