@@ -176,11 +176,10 @@ class ActiveVisionEnv(gym.Env[dict[str, Any], np.ndarray]):
         if self.render_mode is None:
             gym.logger.warn("render() called with render_mode=None; pass render_mode='rgb_array'")
             return None
-        if self._state is None or self._output is None or self._frame is None:
-            raise RuntimeError("call reset() before render()")
-        top = self._top_down.draw(self._state, self._output, self.codes)
-        image = self._frame.image if self._frame.image is not None else self.sim.camera_view()
-        cam = draw_detections(image, self._output.observations)
+        state, frame, output = self._current()
+        top = self._top_down.draw(state, output, self.codes)
+        image = frame.image if frame.image is not None else self.sim.camera_view()
+        cam = draw_detections(image, output.observations)
         return side_by_side(top, cam)
 
     def close(self) -> None:
@@ -235,16 +234,22 @@ class ActiveVisionEnv(gym.Env[dict[str, Any], np.ndarray]):
         )
         return start, None
 
+    def _current(self) -> tuple[WorldState, SensorFrame, PerceptionOutput]:
+        """This step's truth, sensor frame and perception output."""
+        if self._state is None or self._frame is None or self._output is None:
+            raise RuntimeError("call reset() first")
+        return self._state, self._frame, self._output
+
     def _observation(self) -> dict[str, np.ndarray]:
-        assert self._output is not None and self._frame is not None and self._state is not None
-        state = self._frame.camera_state  # head angles as the joint sensors report them
-        head = np.array([state.head_yaw, state.head_pitch])
-        return self.observation_builder.build(self._output, head, self._frame.sonar)
+        _, frame, output = self._current()
+        joints = frame.camera_state  # head angles as the joint sensors report them
+        head = np.array([joints.head_yaw, joints.head_pitch])
+        return self.observation_builder.build(output, head, frame.sonar)
 
     def _reward_terms(self) -> dict[str, float]:
-        assert self._output is not None and self._state is not None
-        slam = self._output.slam
-        error = float(np.hypot(*(self._state.robot_pose[:2] - slam.pose[:2])))
+        state, _, output = self._current()
+        slam = output.slam
+        error = float(np.hypot(*(state.robot_pose[:2] - slam.pose[:2])))
         std = float(math.sqrt(max(np.trace(slam.pose_cov[:2, :2]), 0.0)))
         return {
             "position_error": -self.config.error_weight * error,
@@ -252,18 +257,18 @@ class ActiveVisionEnv(gym.Env[dict[str, Any], np.ndarray]):
         }
 
     def _info(self, terms: dict[str, float], timing: StepTimes) -> dict[str, Any]:
-        assert self._output is not None and self._state is not None
-        slam, s = self._output.slam, self._state
+        s, _, output = self._current()
+        slam = output.slam
         return {
             "perception": {
                 "pose": slam.pose.copy(),
                 "pose_cov": slam.pose_cov.copy(),
-                "odometry_pose": self._output.odometry_pose.copy(),
+                "odometry_pose": output.odometry_pose.copy(),
                 "landmarks": slam.landmarks.copy(),
                 "landmark_ids": slam.landmark_ids.copy(),
                 "landmark_covs": slam.landmark_covs.copy(),
                 "detections": [
-                    (o.landmark_id, o.range_m, o.bearing_rad) for o in self._output.observations
+                    (o.landmark_id, o.range_m, o.bearing_rad) for o in output.observations
                 ],
             },
             "ground_truth": {
