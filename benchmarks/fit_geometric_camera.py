@@ -30,7 +30,8 @@ import numpy as np
 
 import spl_env  # noqa: F401  (registers the env ids)
 from agents.baselines import FixedHead, HeadScan
-from perception.geometry import range_bearing, wrap_angle
+from perception.geometry import wrap_angle
+from perception.metrics import landmark_range_bearing
 from spl_env.sensors.camera import blur_length_px
 from spl_env.sensors.geometric_camera import smear
 
@@ -63,12 +64,8 @@ def collect(episodes: int, seconds: float, seed: int) -> dict[str, list]:
                 obs, _, terminated, truncated, info = env.step(action)
                 done, step = terminated or truncated, step + 1
                 gt = info["ground_truth"]
-                truth = dict(
-                    zip(
-                        gt["landmark_ids"].tolist(),
-                        range_bearing(gt["robot_pose"], gt["landmarks"]),
-                        strict=True,
-                    )
+                truth = landmark_range_bearing(
+                    gt["robot_pose"], gt["landmark_ids"], gt["landmarks"]
                 )
                 position, rotation = core.sim.robot.camera_pose_world()
                 visible = core.sim.geometric_camera.visible(core.sim.world, position, rotation)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from perception.geometry import FloatArray, wrap_angle
+from perception.geometry import FloatArray, range_bearing, wrap_angle
 
 
 def position_error(true_pose: ArrayLike, estimate: ArrayLike) -> float:
@@ -24,6 +24,15 @@ def pose_nees(true_pose: ArrayLike, estimate: ArrayLike, cov: ArrayLike) -> floa
     e = np.asarray(true_pose, dtype=np.float64) - np.asarray(estimate, dtype=np.float64)
     e[2] = float(wrap_angle(e[2]))
     return float(e @ np.linalg.solve(np.asarray(cov, dtype=np.float64), e))
+
+
+def landmark_range_bearing(
+    pose: ArrayLike, ids: ArrayLike, landmarks: ArrayLike
+) -> dict[int, FloatArray]:
+    """Range (m) and bearing (rad, robot frame) (2,) from ``pose`` (3,) to each of the (L, 2)
+    ``landmarks``, keyed by their ids (L,): the truth a sighting is scored against."""
+    rb = range_bearing(pose, landmarks)
+    return {int(i): rb[k] for k, i in enumerate(np.asarray(ids))}
 
 
 def landmark_errors(

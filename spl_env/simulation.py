@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from perception.geometry import FloatArray, wrap_angle
+from perception.geometry import FloatArray, transform_points, wrap_angle
 from perception.types import PoleCode, SensorFrame
 from spl_env.behaviours import WalkerConfig, WaypointWalker
 from spl_env.sensors.camera import Camera, CameraConfig, EpisodeLighting, blur_length_px
@@ -228,10 +228,7 @@ class SplSimulation:
         it stepped: the slip a real Nao sees when it walks into an obstacle.
         """
         increment = robot.walk_step(command, self.config.control_dt_s)
-        c, s = math.cos(robot.pose[2]), math.sin(robot.pose[2])
-        new_xy = robot.pose[:2] + np.array(
-            [c * increment[0] - s * increment[1], s * increment[0] + c * increment[1]]
-        )
+        new_xy = transform_points(robot.pose, increment[None, :2])[0]
         others = [o for o in (self.robot, *self.others) if o is not robot]
         blocked = self._collides(new_xy, others, clearance=0.0)
         robot.commit_motion(None if blocked else increment)

@@ -53,7 +53,6 @@ class BulletWorld:
             raise ValueError(f"time_step_s must be in (0, 0.1] s, got {time_step_s}")
         self._client: int | None = p.connect(p.DIRECT)
         self._bodies: dict[str, int] = {}
-        self._names: dict[int, str] = {}
         self.time_step_s = time_step_s
         p.setGravity(0.0, 0.0, -gravity_mps2, physicsClientId=self.client)
         p.setTimeStep(time_step_s, physicsClientId=self.client)
@@ -70,21 +69,11 @@ class BulletWorld:
         if name in self._bodies:
             raise ValueError(f"body name {name!r} is already used")
         self._bodies[name] = body_id
-        self._names[body_id] = name
         return body_id
 
     def body(self, name: str) -> int:
         """The body id of ``name``."""
         return self._bodies[name]
-
-    def name_of(self, body_id: int) -> str | None:
-        """The name of ``body_id``, or ``None`` for unknown ids (e.g. -1, no hit)."""
-        return self._names.get(body_id)
-
-    @property
-    def body_names(self) -> tuple[str, ...]:
-        """All registered names, in creation order."""
-        return tuple(self._bodies)
 
     def add_static(
         self,

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from perception.geometry import range_bearing
+from perception.metrics import landmark_range_bearing
 from perception.vision import ColourFilterConfig, ColourPoleDetector
 from spl_env.sensors.camera import EpisodeLighting
 from spl_env.sensors.geometric_camera import GeometricCameraConfig
@@ -160,13 +160,7 @@ def test_geometric_env_passes_checker_and_is_deterministic() -> None:
     for _ in range(30):
         *_, info = env.step(np.zeros(2, dtype=np.float32))
         gt = info["ground_truth"]
-        truth = dict(
-            zip(
-                gt["landmark_ids"].tolist(),
-                range_bearing(gt["robot_pose"], gt["landmarks"]),
-                strict=True,
-            )
-        )
+        truth = landmark_range_bearing(gt["robot_pose"], gt["landmark_ids"], gt["landmarks"])
         for landmark_id, range_m, _ in info["perception"]["detections"]:
             assert range_m == pytest.approx(truth[landmark_id][0], rel=0.05)
             checked += 1
