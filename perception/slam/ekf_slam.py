@@ -1,7 +1,7 @@
-"""Classic EKF SLAM with known correspondences (seed 000 chapter 2.1, Algorithm 5).
+"""EKF SLAM with known correspondences (seed 000 chapter 2.1, Algorithm 5) and its back ends.
 
 The state is the robot pose in the field frame followed by the field positions of the mapped
-landmarks, in the order they were first seen::
+landmarks, in the order they were added to the map::
 
     mu = (x, y, theta, m1_x, m1_y, ..., mL_x, mL_y)        (3 + 2L,)  m, m, rad, m, ...
 
@@ -17,6 +17,26 @@ Symbols, as in the seed and in Thrun, Burgard & Fox, *Probabilistic Robotics*, c
 - ``S``: (2, 2) innovation covariance ``H Sigma H^T + Q``;
 - ``K``: (3 + 2L, 2) Kalman gain ``Sigma H^T S^-1``;
 - ``y``: (2,) innovation ``z - h(mu)`` with the bearing wrapped.
+
+The four back ends of seed 000 (§2.1.3, §3.2.1, Table 4.1), chosen by ``EkfSlamConfig.backend``:
+
+- ``"classic"``: Algorithm 5. A landmark enters the map at its first sighting; every sighting
+  of a mapped landmark is fused; all Jacobians are taken at the current estimate.
+- ``"gated"``: a sighting of a mapped landmark is discarded when its range differs from the
+  predicted range by more than ``gate_range_m`` (0.4 m) or its bearing by more than
+  ``gate_bearing_rad`` (pi/3, wrapped). ``gate="mahalanobis"`` replaces these thresholds by a
+  chi-square validation gate on ``y^T S^-1 y``.
+- ``"minimal_view"``: a landmark enters the map only once it has been seen ``min_views``
+  (default 3) times in about the same field position; it is initialised from the latest of
+  those sightings and the earlier ones are discarded.
+- ``"fej"``: the first-estimates Jacobian EKF of Huang, Mourikis & Roumeliotis (ICRA 2008).
+  ``G`` uses the difference of the predicted positions ``p_{k+1|k} - p_{k|k-1}`` and ``H`` is
+  taken at the predicted pose of the step and at each landmark's first estimate, so the filter
+  keeps the 3 unobservable directions (global translation and rotation) of the true system and
+  gains no spurious information about the heading.
+
+``min_views`` and ``gate`` are independent of the back end: any back end may buffer new
+landmarks and gate sightings of mapped ones (the seed's "minimal view FEJ-EKF, n=5").
 
 Odometry noise is modelled on the robot-frame increment ``(dx, dy, dtheta)`` rather than on
 ``(rot1, trans, rot2)``: a Nao walks omnidirectionally, and a sidestep is then no noisier than a
@@ -39,6 +59,18 @@ from perception.types import LandmarkObservation, SlamEstimate
 
 _MIN_RANGE_M = 1e-6  # below this a landmark estimate sits on the robot and h cannot be linearised
 
+BACKENDS = ("classic", "gated", "minimal_view", "fej")  # values of EkfSlamConfig.backend
+GATES = ("none", "thresholds", "mahalanobis")  # values of EkfSlamConfig.gate
+_DEFAULT_MIN_VIEWS = {"minimal_view": 3}  # seed Table 4.1: n = 3 did best; 1 for the others
+_DEFAULT_GATE = {"gated": "thresholds"}  # "none" for the others
+# Positive real fields: name -> (upper bound, whether the bound itself is allowed); all are > 0.
+_POSITIVE_LIMITS = {
+    "gate_range_m": (math.inf, False),
+    "gate_bearing_rad": (math.pi, True),
+    "gate_probability": (1.0, False),
+    "min_views_radius_m": (math.inf, False),
+}
+
 
 @dataclass(frozen=True, kw_only=True)
 class EkfSlamConfig:
@@ -49,6 +81,21 @@ class EkfSlamConfig:
     average (std 0.25; 1500 seeds), as in seed 000's Nao dataset (mean 0.50 m, std 0.20). Much
     of a Nao's drift is systematic, which a white-noise filter can only cover by a larger random
     walk, so these exceed the random part of :class:`spl_env.sensors.odometry.OdometryConfig`.
+
+    The back end (see the module docstring) and its measurement filters:
+
+    - ``backend``: one of :data:`BACKENDS`.
+    - ``min_views``: sightings "in about the same place" a landmark needs before it enters the
+      map (>= 1); None is the back end's default, :attr:`resolved_min_views`.
+    - ``gate``: one of :data:`GATES`, the test a sighting of a mapped landmark must pass to be
+      fused; None is the back end's default, :attr:`resolved_gate`.
+    - ``gate_range_m`` (m), ``gate_bearing_rad`` (rad, in (0, pi]): the ``"thresholds"`` gate
+      discards a sighting whose ``|y_range|`` or ``|wrap(y_bearing)|`` exceeds them (seed §3.2:
+      0.4 m and pi/3).
+    - ``gate_probability``: the ``"mahalanobis"`` gate discards a sighting whose
+      ``y^T S^-1 y`` exceeds the chi-square (2 dof) quantile at this probability, in (0, 1).
+    - ``min_views_radius_m`` (m): a new sighting counts towards ``min_views`` when its field
+      position lies within this distance of the mean of the buffered positions.
     """
 
     translation_noise_m_per_sqrt_m: float = 0.13  # std of each of dx, dy per sqrt(m walked)
@@ -56,6 +103,13 @@ class EkfSlamConfig:
     heading_noise_rad_per_sqrt_m: float = 0.035  # std of dtheta per sqrt(m walked)
     rotation_noise_rad_per_sqrt_rad: float = 0.05  # std of dtheta per sqrt(rad turned)
     initial_pose_std: tuple[float, float, float] = (0.02, 0.02, 0.02)  # m, m, rad: start pose
+    backend: str = "classic"
+    min_views: int | None = None  # None: 3 for "minimal_view", 1 otherwise
+    gate: str | None = None  # None: "thresholds" for "gated", "none" otherwise
+    gate_range_m: float = 0.4  # m: largest |range - predicted range| fused by "thresholds"
+    gate_bearing_rad: float = math.pi / 3  # rad: largest |wrapped bearing error| fused
+    gate_probability: float = 0.99  # "mahalanobis": rejects beyond this chi-square(2) quantile
+    min_views_radius_m: float = 0.5  # m: "about the same place" for min_views
 
     def __post_init__(self) -> None:
         for name in (
@@ -73,6 +127,51 @@ class EkfSlamConfig:
                 "EkfSlamConfig.initial_pose_std must be a tuple of 3 finite values >= 0 "
                 f"(m, m, rad), got {std!r}"
             )
+        self._check_backend()
+        for name, (high, inclusive) in _POSITIVE_LIMITS.items():
+            _check_positive_field(name, getattr(self, name), high, inclusive)
+
+    def _check_backend(self) -> None:
+        """Check ``backend``, ``gate`` and ``min_views``."""
+        for name, allowed, optional in (("backend", BACKENDS, False), ("gate", GATES, True)):
+            value = getattr(self, name)
+            if value is None and optional:
+                continue
+            if not isinstance(value, str):
+                raise TypeError(
+                    f"EkfSlamConfig.{name} must be a str{' or None' if optional else ''}, "
+                    f"got {type(value).__name__} {value!r}"
+                )
+            if value not in allowed:
+                raise ValueError(f"EkfSlamConfig.{name} must be one of {allowed}, got {value!r}")
+        n = self.min_views
+        if n is None:
+            return
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
+            raise TypeError(
+                f"EkfSlamConfig.min_views must be an int >= 1 or None, got {type(n).__name__} {n!r}"
+            )
+        if n < 1:
+            raise ValueError(f"EkfSlamConfig.min_views must be >= 1 or None, got {n!r}")
+
+    @property
+    def resolved_min_views(self) -> int:
+        """``min_views``, or the back end's default when None: 3 for "minimal_view", else 1."""
+        if self.min_views is not None:
+            return int(self.min_views)
+        return _DEFAULT_MIN_VIEWS.get(self.backend, 1)
+
+    @property
+    def resolved_gate(self) -> str:
+        """``gate``, or the back end's default when None: "thresholds" for "gated", else "none"."""
+        if self.gate is not None:
+            return self.gate
+        return _DEFAULT_GATE.get(self.backend, "none")
+
+    @property
+    def gate_mahalanobis_threshold(self) -> float:
+        """Chi-square (2 dof) quantile at ``gate_probability``: ``-2 ln(1 - p)`` (unitless)."""
+        return -2.0 * math.log1p(-self.gate_probability)
 
     def odometry_cov(self, odometry_delta: ArrayLike) -> FloatArray:
         """``M`` (3, 3): covariance of the odometry increment ``(dx, dy, dtheta)`` (robot frame).
@@ -152,17 +251,46 @@ class EkfSlam:
 
     ``initial_pose`` (3,) is the start pose ``(x, y, theta)``; its covariance is
     ``diag(config.initial_pose_std)²``. Call :meth:`predict` with each odometry increment and
-    :meth:`update` with each frame's landmark sightings.
+    :meth:`update` with each frame's landmark sightings. ``config.backend`` picks the back end
+    (module docstring); ``config.resolved_min_views`` and ``config.resolved_gate`` the filters.
+
+    Linearisation points. Step k is everything between the k-th :meth:`predict` and the next;
+    ``p_{k|k-1}`` (:attr:`predicted_pose`) is the pose right after that predict, before any
+    update (the initial pose before the first predict), and ``p_{k|k}`` the current pose.
+
+    - classic ``G``: ``[[1, 0, -(y_{k+1|k} - y_{k|k})], [0, 1, x_{k+1|k} - x_{k|k}], [0, 0, 1]]``;
+      FEJ ``G``: the same with ``p_{k|k-1}`` in place of ``p_{k|k}`` (Huang et al. 2008).
+      ``V`` is taken at the current heading ``theta_{k|k}`` in both.
+    - classic ``H``: at the current pose and landmark estimate; FEJ ``H`` (pose and landmark
+      blocks): at ``p_{k|k-1}`` and at the landmark's first estimate, its position when it was
+      added to the map, for every sighting of the step (even after earlier sightings of the same
+      :meth:`update` call moved the pose). ``H`` does not depend on the heading. The innovation
+      ``y = z - h(mu)`` always uses the current estimate.
+
+    See :meth:`linearisation_point`, :meth:`measurement_jacobian` and :attr:`motion_jacobian`.
     """
 
     def __init__(self, config: EkfSlamConfig, initial_pose: ArrayLike) -> None:
         if not isinstance(config, EkfSlamConfig):
             raise TypeError(f"config must be an EkfSlamConfig, got {type(config).__name__}")
         self._config = config
+        self._fej = config.backend == "fej"
+        self._min_views = config.resolved_min_views
+        self._gate = config.resolved_gate
         self._mu = _finite_vector(initial_pose, "initial_pose", 3)
         self._mu[2] = wrap_angle(self._mu[2])
         self._sigma = np.diag(np.square(np.asarray(config.initial_pose_std, dtype=np.float64)))
         self._column: dict[int, int] = {}  # landmark id -> index of its x in mu
+        self._first_estimate: dict[int, FloatArray] = {}  # landmark id -> (2,) m when added
+        self._pending: dict[int, list[FloatArray]] = {}  # unmapped id -> buffered (2,) positions
+        self._predicted_pose = self._mu.copy()  # p_{k|k-1}
+        self._G = np.eye(3)  # G of the latest predict
+        self._rejected = 0
+
+    @property
+    def config(self) -> EkfSlamConfig:
+        """The configuration the filter was built with."""
+        return self._config
 
     @property
     def mean(self) -> FloatArray:
@@ -179,14 +307,57 @@ class EkfSlam:
         """Ids of the mapped landmarks in state order."""
         return tuple(self._column)
 
+    @property
+    def rejected(self) -> int:
+        """How many sightings of mapped landmarks the gate has discarded so far."""
+        return self._rejected
+
+    @property
+    def pending_views(self) -> dict[int, int]:
+        """Unmapped landmark id -> consistent sightings buffered towards ``min_views`` (a copy)."""
+        return {landmark_id: len(views) for landmark_id, views in self._pending.items()}
+
+    @property
+    def predicted_pose(self) -> FloatArray:
+        """``p_{k|k-1}`` (3,): the pose after the latest predict, before any update (a copy)."""
+        return self._predicted_pose.copy()
+
+    @property
+    def motion_jacobian(self) -> FloatArray:
+        """``G`` (3, 3) the latest :meth:`predict` used (the identity before the first), a copy."""
+        return self._G.copy()
+
+    def linearisation_point(self, landmark_id: int) -> tuple[FloatArray, FloatArray]:
+        """Pose (3,) and landmark position (2,) at which ``H`` of a sighting is taken now.
+
+        Classic: the current estimates. FEJ: ``p_{k|k-1}`` and the landmark's first estimate.
+        Raises ValueError when the landmark is not mapped.
+        """
+        self._require_mapped(landmark_id, "landmark_id")
+        if self._fej:
+            return self._predicted_pose.copy(), self._first_estimate[landmark_id].copy()
+        column = self._column[landmark_id]
+        return self._mu[:3].copy(), self._mu[column : column + 2].copy()
+
+    def measurement_jacobian(self, landmark_id: int) -> FloatArray:
+        """``H`` (2, 3 + 2L) of a sighting of a mapped landmark, as :meth:`update` would use it."""
+        self._require_mapped(landmark_id, "landmark_id")
+        H_block, index = self._jacobian(landmark_id)
+        H = np.zeros((2, len(self._mu)))
+        H[:, index] = H_block
+        return H
+
     def predict(self, odometry_delta: ArrayLike) -> None:
         """Move the pose by the odometry increment ``(dx, dy, dtheta)`` (m, m, rad).
 
         The increment is in the frame of the previous odometry pose. Only the pose block and the
-        pose-landmark cross blocks of ``Sigma`` change: O(L) per call.
+        pose-landmark cross blocks of ``Sigma`` change: O(L) per call. FEJ takes ``G`` from
+        ``p_{k+1|k} - p_{k|k-1}`` (class docstring).
         """
         delta = _finite_vector(odometry_delta, "odometry_delta", 3)
         pose, G, V = motion(self._mu[:3], delta)
+        if self._fej:
+            G = first_estimates_motion_jacobian(pose, self._predicted_pose)
         M = self._config.odometry_cov(delta)
         sigma = self._sigma
         pose_cov = G @ sigma[:3, :3] @ G.T + V @ M @ V.T
@@ -194,13 +365,18 @@ class EkfSlam:
         sigma[:3, 3:] = G @ sigma[:3, 3:]
         sigma[3:, :3] = sigma[:3, 3:].T
         self._mu[:3] = pose
+        self._predicted_pose = pose.copy()
+        self._G = G
 
-    def update(self, observations: Sequence[LandmarkObservation]) -> None:
-        """Fuse landmark sightings one after another (Algorithm 5 lines 8-19).
+    def update(self, observations: Sequence[LandmarkObservation]) -> int:
+        """Fuse landmark sightings one after another (Algorithm 5 lines 8-19); return how many.
 
-        A landmark id seen for the first time is added to the map from its sighting; the others
-        correct the state. All observations are checked before any is used, so a bad one leaves
-        the filter unchanged.
+        A sighting of a mapped landmark corrects the state unless the gate rejects it (then it
+        changes nothing but :attr:`rejected`). A sighting of an unmapped one is buffered; the
+        ``min_views``-th consistent one adds the landmark to the map. The return value counts
+        corrections and additions: ``len(observations)`` minus rejected and buffered sightings.
+        All observations are checked before any is used, so a bad one leaves the filter
+        unchanged.
         """
         if isinstance(observations, LandmarkObservation) or not isinstance(observations, Sequence):
             raise TypeError(
@@ -208,24 +384,23 @@ class EkfSlam:
                 f"got {type(observations).__name__}"
             )
         checked = [_measurement(obs, f"observations[{i}]") for i, obs in enumerate(observations)]
+        fused = 0
         for landmark_id, z, Q in checked:
             if landmark_id in self._column:
-                self._correct(self._column[landmark_id], z, Q)
+                fused += self._correct(landmark_id, z, Q)
             else:
-                self._add_landmark(landmark_id, z, Q)
+                fused += self._sight_unmapped(landmark_id, z, Q)
+        return fused
 
     def innovation(self, observation: LandmarkObservation) -> tuple[FloatArray, FloatArray]:
         """``y`` (2,) and ``S`` (2, 2) of a sighting of an already mapped landmark.
 
+        These are what :meth:`update` would gate on and fuse (FEJ: ``S`` with the FEJ ``H``).
         Leaves the filter unchanged. Raises ValueError when the landmark is not mapped.
         """
         landmark_id, z, Q = _measurement(observation, "observation")
-        if landmark_id not in self._column:
-            raise ValueError(
-                f"observation.landmark_id {landmark_id} is not mapped; mapped ids: "
-                f"{self.landmark_ids}"
-            )
-        y, S, _, _ = self._linearise(self._column[landmark_id], z, Q)
+        self._require_mapped(landmark_id, "observation.landmark_id")
+        y, S, _, _ = self._linearise(landmark_id, z, Q)
         return y, S
 
     def estimate(self) -> SlamEstimate:
@@ -241,22 +416,48 @@ class EkfSlam:
             landmark_covs=self._sigma[blocks[:, :, None], blocks[:, None, :]],
         )
 
+    def _require_mapped(self, landmark_id: int, name: str) -> None:
+        """Raise ValueError naming ``name`` unless ``landmark_id`` is in the map."""
+        if landmark_id not in self._column:
+            raise ValueError(f"{name} {landmark_id} is not mapped; mapped ids: {self.landmark_ids}")
+
+    def _jacobian(self, landmark_id: int) -> tuple[FloatArray, FloatArray]:
+        """The nonzero block of ``H`` (2, 5) at the linearisation point, and its state indices."""
+        column = self._column[landmark_id]
+        if self._fej:
+            _, H_pose, H_lm = observe(self._predicted_pose, self._first_estimate[landmark_id])
+        else:
+            _, H_pose, H_lm = observe(self._mu[:3], self._mu[column : column + 2])
+        return np.hstack([H_pose, H_lm]), np.array([0, 1, 2, column, column + 1])
+
     def _linearise(
-        self, column: int, z: FloatArray, Q: FloatArray
+        self, landmark_id: int, z: FloatArray, Q: FloatArray
     ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """``y`` (2,), ``S`` (2, 2), the nonzero block of ``H`` (2, 5) and its state indices."""
-        z_hat, H_pose, H_lm = observe(self._mu[:3], self._mu[column : column + 2])
+        column = self._column[landmark_id]
+        z_hat, _, _ = observe(self._mu[:3], self._mu[column : column + 2])
         y = z - z_hat
         # Bearings are angles: near ±pi (behind the robot) z - h(mu) can be off by 2 pi.
         y[1] = wrap_angle(y[1])
-        H = np.hstack([H_pose, H_lm])
-        index = np.array([0, 1, 2, column, column + 1])
+        H, index = self._jacobian(landmark_id)
         S = H @ self._sigma[np.ix_(index, index)] @ H.T + Q
         return y, S, H, index
 
-    def _correct(self, column: int, z: FloatArray, Q: FloatArray) -> None:
-        """One EKF correction with a sighting of the landmark whose x is ``mu[column]``."""
-        y, S, H, index = self._linearise(column, z, Q)
+    def _passes_gate(self, y: FloatArray, S: FloatArray) -> bool:
+        """Whether the gate lets a sighting with innovation ``y`` and covariance ``S`` through."""
+        config = self._config
+        if self._gate == "thresholds":
+            return abs(y[0]) <= config.gate_range_m and abs(y[1]) <= config.gate_bearing_rad
+        if self._gate == "mahalanobis":
+            return float(y @ np.linalg.solve(S, y)) <= config.gate_mahalanobis_threshold
+        return True
+
+    def _correct(self, landmark_id: int, z: FloatArray, Q: FloatArray) -> bool:
+        """One gated EKF correction with a sighting of a mapped landmark; whether it was fused."""
+        y, S, H, index = self._linearise(landmark_id, z, Q)
+        if not self._passes_gate(y, S):
+            self._rejected += 1
+            return False
         sigma_Ht = self._sigma[:, index] @ H.T  # Sigma H^T (n, 2)
         K = np.linalg.solve(S, sigma_Ht.T).T  # S is symmetric, so this is Sigma H^T S^-1
         self._mu += K @ y
@@ -266,9 +467,33 @@ class EkfSlam:
         IKH_sigma = self._sigma - K @ sigma_Ht.T
         joseph = IKH_sigma - (IKH_sigma[:, index] @ H.T) @ K.T + K @ Q @ K.T
         self._sigma = 0.5 * (joseph + joseph.T)
+        return True
+
+    def _sight_unmapped(self, landmark_id: int, z: FloatArray, Q: FloatArray) -> bool:
+        """Buffer a sighting of an unmapped landmark; add it at the ``min_views``-th in place.
+
+        The sighting's field position is ``inverse_observe`` from the current pose. It joins the
+        buffer when within ``min_views_radius_m`` of the buffer's mean and restarts the buffer
+        otherwise. A full buffer is dropped and the landmark added from this latest sighting.
+        Returns whether the landmark was added.
+        """
+        if self._min_views > 1:
+            m, _, _ = inverse_observe(self._mu[:3], z)
+            views = self._pending.get(landmark_id, [])
+            if views:
+                offset = m - np.mean(views, axis=0)
+                if math.hypot(offset[0], offset[1]) > self._config.min_views_radius_m:
+                    views = []
+            views.append(m)
+            if len(views) < self._min_views:
+                self._pending[landmark_id] = views
+                return False
+            self._pending.pop(landmark_id, None)
+        self._add_landmark(landmark_id, z, Q)
+        return True
 
     def _add_landmark(self, landmark_id: int, z: FloatArray, Q: FloatArray) -> None:
-        """Append a landmark from its first sighting, with its full first-order covariance."""
+        """Append a landmark from a sighting, with its full first-order covariance."""
         m, J_pose, J_z = inverse_observe(self._mu[:3], z)
         n = len(self._mu)
         cross = J_pose @ self._sigma[:3, :]  # Cov(m, state) (2, n)
@@ -281,6 +506,21 @@ class EkfSlam:
         self._sigma = sigma
         self._mu = np.concatenate([self._mu, m])
         self._column[landmark_id] = n
+        self._first_estimate[landmark_id] = m
+
+
+def first_estimates_motion_jacobian(
+    predicted: ArrayLike, previous_predicted: ArrayLike
+) -> FloatArray:
+    """FEJ ``G`` (3, 3) from the new prediction ``p_{k+1|k}`` and the previous ``p_{k|k-1}``.
+
+    Both are (3,) poses in the field frame; only their positions enter (Huang, Mourikis &
+    Roumeliotis 2008): ``[[1, 0, -(y_{k+1|k} - y_{k|k-1})], [0, 1, x_{k+1|k} - x_{k|k-1}],
+    [0, 0, 1]]``.
+    """
+    x1, y1, _ = np.asarray(predicted, dtype=np.float64)
+    x0, y0, _ = np.asarray(previous_predicted, dtype=np.float64)
+    return np.array([[1.0, 0.0, -(y1 - y0)], [0.0, 1.0, x1 - x0], [0.0, 0.0, 1.0]])
 
 
 def _is_finite_real(value: object) -> bool:
@@ -295,6 +535,21 @@ def _is_finite_real(value: object) -> bool:
 def _is_finite_nonnegative(value: object) -> bool:
     """Whether ``value`` is a finite real number >= 0."""
     return _is_finite_real(value) and value >= 0  # type: ignore[operator]
+
+
+def _check_positive_field(name: str, value: object, high: float, inclusive: bool) -> None:
+    """Raise naming ``EkfSlamConfig.<name>`` unless ``value`` is a real in ``(0, high]``.
+
+    The interval is ``(0, high)`` when not ``inclusive``.
+    """
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(
+            f"EkfSlamConfig.{name} must be a real number, got {type(value).__name__} {value!r}"
+        )
+    below_high = value <= high if inclusive else value < high
+    if not (math.isfinite(value) and value > 0 and below_high):
+        interval = f"(0, {high:g}{']' if inclusive else ')'}"
+        raise ValueError(f"EkfSlamConfig.{name} must be finite and in {interval}, got {value!r}")
 
 
 def _finite_vector(value: ArrayLike, name: str, size: int) -> FloatArray:
