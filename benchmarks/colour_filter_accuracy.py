@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from perception.geometry import FloatArray, range_bearing, wrap_angle
-from perception.types import LandmarkObservation, PoleGeometry
+from perception.types import CameraModel, LandmarkObservation, PoleGeometry
 from perception.vision import ColourFilterConfig, ColourPoleDetector
 from spl_env.sensors.camera import Camera, CameraConfig, EpisodeLighting, LightingRandomisation
 from spl_env.sim.robot import NaoRobot, RobotConfig
@@ -72,8 +72,6 @@ class Bench:
         self.detector = ColourPoleDetector(
             ColourFilterConfig(), self.camera.config.model, self.codes, layout.geometry
         )
-        self.samples = _pole_samples(layout.geometry)
-        self.radius_m = layout.geometry.radius_m
 
     def random_frame(self, lighting: EpisodeLighting) -> tuple[np.ndarray, np.ndarray]:
         """Place everyone at random and render: image (H, W, 3) and labels (H, W)."""
@@ -107,29 +105,50 @@ class Bench:
 
     def truth(self, labels: np.ndarray) -> dict[int, dict[str, float | bool]]:
         """Per pole id: true range, bearing, whether in view and whether fully visible."""
-        model = self.camera.config.model
-        position, rotation = self.robot.camera_pose_world()
-        rb = range_bearing(self.robot.pose, self.poles)
-        out: dict[int, dict[str, float | bool]] = {}
-        for code in self.codes:
-            i = code.landmark_id
-            body = self.world.body(self.bodies.poles[i])
-            points = _surface_points(self.samples, self.radius_m, self.poles[i], position)
-            cam = (points - position) @ rotation
-            front = cam[:, 0] > 1e-6
-            u = model.cx - model.fx * cam[:, 1] / np.where(front, cam[:, 0], 1.0)
-            v = model.cy - model.fy * cam[:, 2] / np.where(front, cam[:, 0], 1.0)
-            inside = front & (u >= 1) & (u < model.width - 1) & (v >= 1) & (v < model.height - 1)
-            seen = np.zeros(len(points), dtype=bool)
-            seen[inside] = labels[v[inside].astype(int), u[inside].astype(int)] == body
-            inner = np.abs(self.samples[:, 0]) < 1.0  # the outline's own pixels may show behind
-            out[i] = {
-                "range": float(rb[i, 0]),
-                "bearing": float(rb[i, 1]),
-                "in_view": int(np.count_nonzero(labels == body)) >= MIN_VIEW_PX,
-                "visible": bool(inside.all() and seen[inner].mean() >= VISIBLE_FRACTION),
-            }
-        return out
+        return pole_truth(
+            labels,
+            self.robot,
+            {i: self.world.body(name) for i, name in self.bodies.poles.items()},
+            self.poles,
+            self.camera.config.model,
+            self.scene.poles.geometry,
+        )
+
+
+def pole_truth(
+    labels: np.ndarray,
+    robot: NaoRobot,
+    pole_bodies: dict[int, int],
+    poles: FloatArray,
+    model: CameraModel,
+    geometry: PoleGeometry,
+) -> dict[int, dict[str, float | bool]]:
+    """Per pole id: true range, bearing, whether in view and whether fully visible.
+
+    ``labels`` (H, W) are the body ids of the frame ``robot`` took; ``pole_bodies``
+    maps landmark ids to body ids and ``poles`` (L, 2) holds the poles' positions in id order.
+    """
+    samples = _pole_samples(geometry)
+    position, rotation = robot.camera_pose_world()
+    rb = range_bearing(robot.pose, poles)
+    out: dict[int, dict[str, float | bool]] = {}
+    for i, body in pole_bodies.items():
+        points = _surface_points(samples, geometry.radius_m, poles[i], position)
+        cam = (points - position) @ rotation
+        front = cam[:, 0] > 1e-6
+        u = model.cx - model.fx * cam[:, 1] / np.where(front, cam[:, 0], 1.0)
+        v = model.cy - model.fy * cam[:, 2] / np.where(front, cam[:, 0], 1.0)
+        inside = front & (u >= 1) & (u < model.width - 1) & (v >= 1) & (v < model.height - 1)
+        seen = np.zeros(len(points), dtype=bool)
+        seen[inside] = labels[v[inside].astype(int), u[inside].astype(int)] == body
+        inner = np.abs(samples[:, 0]) < 1.0  # the outline's own pixels may show behind
+        out[i] = {
+            "range": float(rb[i, 0]),
+            "bearing": float(rb[i, 1]),
+            "in_view": int(np.count_nonzero(labels == body)) >= MIN_VIEW_PX,
+            "visible": bool(inside.all() and seen[inner].mean() >= VISIBLE_FRACTION),
+        }
+    return out
 
 
 def _pole_samples(pole: PoleGeometry) -> FloatArray:
@@ -159,6 +178,14 @@ def _surface_points(
     return np.column_stack([across, samples[:, 1]])
 
 
+def is_true_positive(obs: LandmarkObservation, t: dict) -> bool:
+    """Whether ``obs`` matches its pole's truth ``t`` (an item of :meth:`Bench.truth`): the pole
+    is in view and the sighting lies within ``MATCH_FRACTION`` of the true range of it."""
+    est = obs.range_m * np.array([math.cos(obs.bearing_rad), math.sin(obs.bearing_rad)])
+    ref = t["range"] * np.array([math.cos(t["bearing"]), math.sin(t["bearing"])])
+    return bool(t["in_view"] and np.linalg.norm(est - ref) <= MATCH_FRACTION * t["range"])
+
+
 def score(frames: list[tuple[list[LandmarkObservation], dict]], max_range: float) -> dict:
     """Per-pole and overall precision/recall, errors and consistency over ``frames``."""
     counts = {i: {"tp": 0, "fp": 0, "fn": 0} for i in range(6)}
@@ -169,9 +196,7 @@ def score(frames: list[tuple[list[LandmarkObservation], dict]], max_range: float
             t = truth[obs.landmark_id]
             if obs.range_m > max_range:
                 continue
-            est = obs.range_m * np.array([math.cos(obs.bearing_rad), math.sin(obs.bearing_rad)])
-            ref = t["range"] * np.array([math.cos(t["bearing"]), math.sin(t["bearing"])])
-            if t["in_view"] and np.linalg.norm(est - ref) <= MATCH_FRACTION * t["range"]:
+            if is_true_positive(obs, t):
                 counts[obs.landmark_id]["tp"] += 1
                 found.add(obs.landmark_id)
                 dr = obs.range_m - t["range"]

@@ -32,6 +32,7 @@ import spl_env  # noqa: F401  (registers the env ids)
 from agents.baselines import FixedHead, HeadScan
 from perception.geometry import wrap_angle
 from perception.metrics import landmark_range_bearing
+from perception.pipeline import ColourFrontEnd
 from spl_env.sensors.camera import blur_length_px
 from spl_env.sensors.geometric_camera import smear
 
@@ -88,7 +89,10 @@ def collect(episodes: int, seconds: float, seed: int) -> dict[str, list]:
                     rows["geometry"].append(
                         (band, core.sensor_frame.camera_state, true_range, true_bearing)
                     )
-    rows["detector"] = [core.perception.detector]
+    frontend = core.perception.frontend
+    if not isinstance(frontend, ColourFrontEnd):
+        raise TypeError(f"the fit needs the colour front end, got {type(frontend).__name__}")
+    rows["detector"] = [frontend.detector]
     env.close()
     return rows
 

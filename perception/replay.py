@@ -12,6 +12,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from perception.geometry import FloatArray, compose
 from perception.metrics import landmark_errors, pose_nees, position_error
@@ -35,7 +36,7 @@ class SightingLog:
     sightings: Mapping[str, Sightings]  # front end -> T per-step tuples
     true_poses: FloatArray  # (T, 3)
     believed_start: FloatArray  # (3,) the filter's start belief
-    landmark_ids: FloatArray  # (L,) ids of the true landmarks
+    landmark_ids: NDArray[np.int64]  # (L,) ids of the true landmarks
     landmarks: FloatArray  # (L, 2) their true positions
 
     def __post_init__(self) -> None:
@@ -61,7 +62,7 @@ class ReplayResult:
     pose_nees: FloatArray  # (T,) NEES of the SLAM pose (3 dof)
     landmark_errors_m: FloatArray  # (T,) mean error over the landmarks mapped at that step
     poses: FloatArray  # (T, 3) SLAM pose estimates
-    final_landmark_ids: FloatArray  # (K,) mapped at the end
+    final_landmark_ids: NDArray[np.int64]  # (K,) mapped at the end
     final_landmarks: FloatArray  # (K, 2) their estimates
     rejected: int  # sightings the gate discarded
 

@@ -50,6 +50,12 @@ class EnvConfig:
             raise ValueError(
                 "EnvConfig.sim.scene.poles_enabled must be True: the SPL envs map the poles"
             )
+        if self.perception.frontend == "cnn" and self.sim.camera_mode != "rendered":
+            raise ValueError(
+                "EnvConfig.perception.frontend='cnn' needs sim.camera_mode='rendered' (the CNN "
+                f"reads pixels), got camera_mode={self.sim.camera_mode!r}; the geometric mode "
+                "emulates the colour front end"
+            )
         if self.body_behaviour not in BODY_BEHAVIOURS:
             raise ValueError(
                 f"EnvConfig.body_behaviour must be one of {BODY_BEHAVIOURS}, "

@@ -27,9 +27,17 @@ class ActiveVisionEnv(gym.Env[dict[str, Any], np.ndarray]):
     Our Nao walks a scripted path (``body_behaviour="patrol"``: random waypoints inside the
     field; ``"square"``: seed 000's square walk) among four other robots that walk about and
     occlude the view. Six two-coloured poles stand outside the touch lines. Every control step
-    (10 Hz) renders one camera frame; the colour-filter front end detects poles and classic EKF
-    SLAM (seed 000 Algorithm 5) fuses them with noisy walk odometry. The observation is what
-    perception believes, never ground truth.
+    (10 Hz) renders one camera frame; a front end detects poles in it and an EKF SLAM back end
+    fuses them with noisy walk odometry. The observation is what perception believes, never
+    ground truth.
+
+    **Perception** (seed 000), chosen by keyword: ``frontend="colour"`` (HSV colour filter) or
+    ``"cnn"`` (the packaged CenterNet-style detector; rendered camera mode only);
+    ``backend="classic"`` (Algorithm 5), ``"gated"`` (sightings off by more than 0.4 m or
+    π/3 from the prediction are dropped), ``"minimal_view"`` (a pole enters the map after
+    ``min_views`` sightings in one place, default 3) or ``"fej"`` (first-estimates Jacobians);
+    ``min_views=n`` and ``gate="thresholds" | "mahalanobis" | "none"`` combine with any back
+    end. The defaults are the combination that measured best (README, Table 4.3 analogue).
 
     **Action**: ``Box(-1, 1, (2,), float32)``, the head target: yaw ``a[0] * 119.5°`` and pitch
     from ``-38.5°`` (``a[1] = -1``, up) to ``+29.5°`` (``a[1] = 1``, down), linear in between.
@@ -76,11 +84,11 @@ class ActiveVisionEnv(gym.Env[dict[str, Any], np.ndarray]):
     has no robot tracker or laser mapping yet.
 
     **Camera modes** (``camera_mode``): ``"rendered"`` (default) renders a frame and runs the
-    colour filter on it; ``"geometric"`` (about 10x faster) projects the poles' band centres
+    front end on it; ``"geometric"`` (about 10x faster) projects the poles' band centres
     instead, keeps each with the rendered pipeline's fitted chance under the frame's motion blur
     and adds fitted pixel noise, then measures with the same model. The geometric mode makes no
     false detections and ignores lighting randomisation and image noise (it was fitted under
-    default lighting).
+    default lighting). It emulates the colour front end, so it refuses ``frontend="cnn"``.
 
     Keyword arguments override :class:`spl_env.config.EnvConfig` fields by name.
 

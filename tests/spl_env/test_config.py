@@ -140,3 +140,28 @@ def test_a_field_set_twice_raises(overrides: dict[str, Any], match: str) -> None
 def test_bad_values_raise_value_errors(overrides: dict[str, Any], match: str) -> None:
     with pytest.raises(ValueError, match=match):
         with_overrides(EnvConfig(), **overrides)
+
+
+def test_front_and_back_end_are_selected_by_name() -> None:
+    config = with_overrides(
+        EnvConfig(), frontend="cnn", backend="fej", min_views=5, gate="mahalanobis"
+    )
+    assert config.perception.frontend == "cnn"
+    slam = config.perception.slam
+    assert (slam.backend, slam.resolved_min_views, slam.resolved_gate) == ("fej", 5, "mahalanobis")
+    gated = with_overrides(EnvConfig(), backend="gated").perception.slam
+    assert (gated.resolved_gate, gated.resolved_min_views) == ("thresholds", 1)
+
+
+@pytest.mark.parametrize(
+    ("overrides", "message"),
+    [
+        ({"frontend": "yolo"}, "frontend must be one of"),
+        ({"backend": "ukf"}, "backend must be one of"),
+        ({"min_views": 0}, "min_views must be >= 1"),
+        ({"frontend": "cnn", "camera_mode": "geometric"}, "needs sim.camera_mode='rendered'"),
+    ],
+)
+def test_bad_front_or_back_end_is_refused(overrides: dict[str, Any], message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        with_overrides(EnvConfig(), **overrides)

@@ -1,0 +1,34 @@
+"""Recording an episode's sightings and replaying them reproduces the live filter."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import spl_env  # noqa: F401  (registers the env ids)
+from agents.evaluate import load_policy, run_episode
+from agents.recording import frontends_for, record_episode
+from perception.replay import replay
+
+
+@pytest.mark.parametrize("backend", ["classic", "fej"])
+def test_replay_of_a_recording_matches_the_live_filter(backend: str) -> None:
+    env = gym.make(
+        "SPL/ActiveVision-v0", camera_mode="geometric", episode_s=8.0, backend=backend, min_views=2
+    )
+    config = env.get_wrapper_attr("config")
+    policy = load_policy("scan", config)
+    live = run_episode(env, policy, seed=5)
+    log = record_episode(env, load_policy("scan", config), 5, frontends_for(env, ("colour",)))
+    env.close()
+    assert sum(len(s) for s in log.sightings["colour"]) > 10  # the poles were seen
+    np.testing.assert_array_equal(log.true_poses, np.array(live.true_poses))
+    result = replay(log, "colour", config.perception.slam)
+    np.testing.assert_allclose(result.poses, np.array(live.slam_poses), atol=1e-12)
+
+
+def test_recording_needs_an_spl_env() -> None:
+    env = gym.make("CartPole-v1")
+    with pytest.raises(TypeError, match="ActiveVisionEnv"):
+        frontends_for(env, ("colour",))
