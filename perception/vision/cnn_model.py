@@ -1,7 +1,7 @@
 """The CNN of the pole detector and its target encoding and decoding (CenterNet-style).
 
 A single-shot keypoint detector (Zhou et al., "Objects as Points", 2019) sized for one CPU
-thread: four stride-2 stages (8, 16, 24, 32 channels by default) and one top-down merge give
+thread: four stride-2 stages (8, 16, 32, 48 channels by default) and one top-down merge give
 a grid at output stride :data:`STRIDE` = 8 (30 x 40 cells for a 240 x 320 frame) with, per
 cell,
 
@@ -40,8 +40,8 @@ _PRIOR = 0.05  # initial heatmap probability (bias of the heatmap logits)
 class NetConfig:
     """Channel counts of :class:`PoleNet` and its number of classes."""
 
-    channels: tuple[int, int, int, int] = (8, 16, 24, 32)  # per stride-2 stage
-    head_channels: int = 16
+    channels: tuple[int, int, int, int] = (8, 16, 32, 48)  # per stride-2 stage
+    head_channels: int = 24
     n_classes: int = 9
 
     def __post_init__(self) -> None:
