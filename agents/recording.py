@@ -6,13 +6,14 @@ through each back end: rendering happens once, and every front end reads the sam
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 
 import gymnasium as gym
 import numpy as np
 
 from agents.evaluate import Policy
-from perception.pipeline import FrontEnd, PipelineConfig, make_frontend
+from perception.pipeline import FrontEnd, make_frontend
 from perception.replay import SightingLog
 from perception.types import LandmarkObservation
 from spl_env.envs.active_vision import ActiveVisionEnv
@@ -23,18 +24,12 @@ def frontends_for(env: gym.Env, names: tuple[str, ...]) -> dict[str, FrontEnd]:
     configured as ``env``'s perception config configures them."""
     core = _core(env)
     config = core.config
-    scene = config.sim.scene
     return {
         name: make_frontend(
-            PipelineConfig(
-                frontend=name,
-                colour_filter=config.perception.colour_filter,
-                cnn=config.perception.cnn,
-                slam=config.perception.slam,
-            ),
+            dataclasses.replace(config.perception, frontend=name),
             config.sim.camera.model,
             core.codes,
-            scene.poles.geometry,
+            config.sim.scene.poles.geometry,
         )
         for name in names
     }

@@ -381,7 +381,7 @@ def main() -> None:
         "cpu_count": os.cpu_count(),
         "torch_threads": torch.get_num_threads(),
         "cnn_score_threshold": args.score_threshold,
-        "cnn_weights": str(cnn_config.weights),
+        "cnn_weights": cnn_config.weights.name,
     }
     args.out.mkdir(parents=True, exist_ok=True)
     if args.protocol == "random":

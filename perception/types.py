@@ -7,6 +7,7 @@ defined in :mod:`perception.geometry`.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -33,6 +34,17 @@ class PoleCode:
             raise ValueError(
                 f"PoleCode needs exactly one pink band, got top={self.top!r} bottom={self.bottom!r}"
             )
+
+
+def pole_ids_by_colours(codes: Sequence[PoleCode]) -> dict[tuple[str, str], int]:
+    """Landmark id of each ``(top, bottom)`` colour pair; ValueError if ``codes`` repeat a pair
+    or an id."""
+    ids: dict[tuple[str, str], int] = {}
+    for code in codes:
+        if (code.top, code.bottom) in ids or code.landmark_id in ids.values():
+            raise ValueError(f"codes must have unique colour pairs and ids, got {code} twice")
+        ids[(code.top, code.bottom)] = code.landmark_id
+    return ids
 
 
 @dataclass(frozen=True, kw_only=True)

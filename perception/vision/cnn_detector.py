@@ -41,7 +41,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from perception.geometry import FloatArray, pixel_rays
-from perception.types import CameraModel, CameraState, LandmarkObservation, PoleCode, PoleGeometry
+from perception.types import (
+    CameraModel,
+    CameraState,
+    LandmarkObservation,
+    PoleCode,
+    PoleGeometry,
+    pole_ids_by_colours,
+)
 
 if TYPE_CHECKING:
     from torch import nn
@@ -323,15 +330,11 @@ class CnnPoleDetector:
             raise ValueError(f"camera must match the weights' camera {trained}, got {camera}")
         self.classes: tuple[str, ...] = tuple(data["classes"])
         self._landmark_of: dict[int, int] = {}
-        for code in codes:
-            name = pole_class_name(code)
+        for (top, bottom), landmark_id in pole_ids_by_colours(codes).items():
+            name = pole_class_name(PoleCode(landmark_id=landmark_id, top=top, bottom=bottom))
             if name not in self.classes:
                 raise ValueError(f"codes: class {name!r} is not among the weights' {self.classes}")
-            if self.classes.index(name) in self._landmark_of or code.landmark_id in (
-                self._landmark_of.values()
-            ):
-                raise ValueError(f"codes must have unique colour pairs and ids, got {code} twice")
-            self._landmark_of[self.classes.index(name)] = code.landmark_id
+            self._landmark_of[self.classes.index(name)] = landmark_id
         self.range_model = PoleRangeModel.from_dict(data["range_model"])
         self._net = load_network(data)
 

@@ -52,7 +52,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from perception.geometry import FloatArray, pixel_rays, project_points, wrap_angle
-from perception.types import CameraModel, CameraState, LandmarkObservation, PoleCode, PoleGeometry
+from perception.types import (
+    CameraModel,
+    CameraState,
+    LandmarkObservation,
+    PoleCode,
+    PoleGeometry,
+    pole_ids_by_colours,
+)
 
 HsvRange = tuple[tuple[int, int, int], tuple[int, int, int]]
 """Inclusive ``((h, s, v) low, (h, s, v) high)`` bounds, OpenCV convention."""
@@ -227,11 +234,7 @@ class ColourPoleDetector:
         self.config = config
         self.camera = camera
         self.pole = pole
-        self._ids: dict[tuple[str, str], int] = {}
-        for code in codes:
-            if (code.top, code.bottom) in self._ids or code.landmark_id in self._ids.values():
-                raise ValueError(f"codes must have unique colour pairs and ids, got {code} twice")
-            self._ids[(code.top, code.bottom)] = code.landmark_id
+        self._ids = pole_ids_by_colours(codes)
         self._bounds = {
             colour: tuple(np.array(b, dtype=np.uint8) for b in config.hsv_range(colour))
             for colour in _SEGMENT_COLOURS
