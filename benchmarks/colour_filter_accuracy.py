@@ -16,9 +16,12 @@ Ground truth per pole, from the renderer's body-id labels:
 
 A detection is a true positive if its pole is in view and the detected position is within
 ``MATCH_FRACTION`` of the true range of the truth; otherwise a false positive. Recall counts
-fully visible poles only. Both are reported per pole and overall, for poles (detections) within
-5 m and at any range. Range and bearing errors are over true positives within 5 m, with the mean
-squared normalised errors (``nees_*``, about 1 for a consistent covariance).
+fully visible poles only. Both are reported per pole and overall, within 5 m and at any range:
+within 5 m, recall counts the fully visible poles whose true range is within 5 m, and precision
+the detections whose pole or whose estimate lies within 5 m (so that a pole at 4.9 m seen at 5.1
+m is found, and one at 5.2 m seen at 4.4 m is a false positive). Range and bearing errors are
+over true positives within 5 m, with the mean squared normalised errors (``nees_*``, about 1 for
+a consistent covariance).
 
 Usage::
 
@@ -194,7 +197,7 @@ def score(frames: list[tuple[list[LandmarkObservation], dict]], max_range: float
         found = set()
         for obs in detections:
             t = truth[obs.landmark_id]
-            if obs.range_m > max_range:
+            if obs.range_m > max_range and t["range"] > max_range:
                 continue
             if is_true_positive(obs, t):
                 counts[obs.landmark_id]["tp"] += 1

@@ -20,6 +20,11 @@ reason). The extent used (:meth:`PoleRangeModel.branch`):
   touch the left or right border too, every size is cut and the smaller of the height's and
   the width's distance is taken.
 
+Where the pole's three band edges (top, junction, base) are found in the image and agree, the
+distance comes from them instead (:mod:`perception.vision.pole_edges`: sub-pixel edge rows on
+a known ruler), with the relative variance their least-squares fit implies; on held-out frames
+that is 1.1 % mean relative range error against 4.0 % for the extents on the same poles.
+
 The bearing follows the colour filter's route (:mod:`perception.vision.colour_filter`): the ray
 through the box centre, turned into the robot frame by the camera state, gives the heading;
 the pole axis lies ``d`` along it from the camera, and its range and bearing from the robot
@@ -49,6 +54,7 @@ from perception.types import (
     PoleGeometry,
     pole_ids_by_colours,
 )
+from perception.vision.pole_edges import PoleEdgeConfig, pole_edge_distance
 
 if TYPE_CHECKING:
     from torch import nn
@@ -82,6 +88,9 @@ class CnnDetectorConfig:
     # gone (0.07 m); higher thresholds only lose sightings. Seed 000 used 0.85 / 0.875.
     score_threshold: float = 0.6
     max_detections: int = 20  # per frame, all classes
+    # Distance from the band edges (perception.vision.pole_edges) where they are found; None:
+    # from the box extents only.
+    edges: PoleEdgeConfig | None = field(default_factory=PoleEdgeConfig)
 
     def __post_init__(self) -> None:
         if not isinstance(self.weights, Path):
@@ -100,6 +109,11 @@ class CnnDetectorConfig:
         ):
             raise ValueError(
                 f"CnnDetectorConfig.max_detections must be an int >= 1, got {self.max_detections!r}"
+            )
+        if not (self.edges is None or isinstance(self.edges, PoleEdgeConfig)):
+            raise TypeError(
+                "CnnDetectorConfig.edges must be a PoleEdgeConfig or None, "
+                f"got {type(self.edges).__name__}"
             )
 
 
@@ -208,6 +222,18 @@ class PoleRangeModel:
         return distance, c0 + c1 / size**2, branch
 
 
+def vertical_lean(box: FloatArray, camera: CameraModel, rotation: FloatArray) -> float:
+    """Image slope ``du/dv`` of a vertical line through the centre of ``box`` (4,) pixel edges
+    seen by a camera with camera-to-robot ``rotation`` (3, 3): the derivative of the pinhole
+    projection along the vertical, whose camera-frame direction is ``rotation``'s last row
+    (0 if the vertical does not point up in the image)."""
+    uc, vc = (float(box[0]) + float(box[2])) / 2, (float(box[1]) + float(box[3])) / 2
+    up = rotation[2]
+    du = camera.fx * (up[1] - up[0] * (camera.cx - uc) / camera.fx)
+    dv = camera.fy * (up[2] - up[0] * (camera.cy - vc) / camera.fy)
+    return du / dv if dv > 0 else 0.0
+
+
 def _pole_rays(
     box: FloatArray, keypoint: FloatArray, camera: CameraModel, rotation: FloatArray
 ) -> FloatArray:
@@ -216,17 +242,13 @@ def _pole_rays(
     the ends of its horizontal cross-section at the centre row; ``rotation`` (3, 3) is
     camera-to-robot.
 
-    The image of the vertical through the centre leans by ``s = du/dv``, the derivative of the
-    pinhole projection along the vertical (whose camera-frame direction is ``rotation``'s last
-    row); the pole's ends lie on that line at the box's top and bottom rows, and its
-    cross-section is the box width less ``|s|`` x its height.
+    The image of the vertical through the centre leans by ``s = du/dv``
+    (:func:`vertical_lean`); the pole's ends lie on that line at the box's top and bottom rows,
+    and its cross-section is the box width less ``|s|`` x its height.
     """
     u0, v0, u1, v1 = (float(x) for x in box)
     uc, vc = (u0 + u1) / 2, (v0 + v1) / 2
-    up = rotation[2]
-    du = camera.fx * (up[1] - up[0] * (camera.cx - uc) / camera.fx)
-    dv = camera.fy * (up[2] - up[0] * (camera.cy - vc) / camera.fy)
-    lean = du / dv if dv > 0 else 0.0  # dv > 0: the vertical points up in the image
+    lean = vertical_lean(box, camera, rotation)
     half = 0.5 * max(u1 - u0 - abs(lean) * (v1 - v0), 1.0)
     points = np.array(
         [
@@ -299,8 +321,8 @@ class CnnPoleDetector:
     sightings in the robot frame.
 
     ``camera`` must match the camera the weights were trained for; ``codes`` map pole classes
-    to landmark ids; ``pole`` is the pole geometry (kept for the interface of
-    :class:`perception.vision.ColourPoleDetector`; the range laws encode it).
+    to landmark ids; ``pole`` is the pole geometry (the heights of its band edges; the range
+    laws encode it for the extents).
     Raises ``ValueError`` if the weights file is not a detector file of this format, was
     trained for another camera or lacks a class of ``codes``, or if ``codes`` repeat a colour
     pair or an id.
@@ -338,6 +360,11 @@ class CnnPoleDetector:
         self.range_model = PoleRangeModel.from_dict(data["range_model"])
         self._net = load_network(data)
 
+    @property
+    def network(self) -> nn.Module:
+        """The inference network: (N, 3, H, W) float RGB in [0, 1] to raw outputs."""
+        return self._net
+
     def detect_objects(self, image: NDArray[np.uint8]) -> list[Detection]:
         """All detections in ``image`` (H, W, 3) uint8 RGB, best score first."""
         import torch
@@ -369,12 +396,16 @@ class CnnPoleDetector:
         At most one per landmark id (the highest score), in id order. Same contract as
         :meth:`perception.vision.ColourPoleDetector.detect`.
         """
-        return self.observations(self.detect_objects(image), camera_state)
+        return self.observations(self.detect_objects(image), camera_state, image)
 
     def observations(
-        self, detections: Sequence[Detection], camera_state: CameraState
+        self,
+        detections: Sequence[Detection],
+        camera_state: CameraState,
+        image: NDArray[np.uint8] | None = None,
     ) -> list[LandmarkObservation]:
-        """The sightings of :meth:`detect` from :meth:`detect_objects`' ``detections``.
+        """The sightings of :meth:`detect` from :meth:`detect_objects`' ``detections`` in
+        ``image`` (H, W, 3) uint8 RGB (None: distances from the box extents only).
 
         Pole detections are taken best score first; one is dropped if its band junction lies
         within ``JUNCTION_BORDER_PX`` of the top or bottom border (a band then hardly shows:
@@ -394,23 +425,49 @@ class CnnPoleDetector:
                 or any(box_iou(detection.box, box) > POLE_OVERLAP_IOU for box in taken)
             ):
                 continue
-            observation = self.observe_pole(landmark_id, detection, camera_state)
+            observation = self.observe_pole(landmark_id, detection, camera_state, image)
             if observation is not None:
                 best[landmark_id] = observation
                 taken.append(detection.box)
         return [best[i] for i in sorted(best)]
 
     def observe_pole(
-        self, landmark_id: int, detection: Detection, state: CameraState
+        self,
+        landmark_id: int,
+        detection: Detection,
+        state: CameraState,
+        image: NDArray[np.uint8] | None = None,
     ) -> LandmarkObservation | None:
-        """The sighting of pole ``landmark_id`` from its ``detection``, or None if its box is
-        degenerate."""
+        """The sighting of pole ``landmark_id`` from its ``detection`` in ``image`` (H, W, 3)
+        uint8 RGB, or None if its box is degenerate.
+
+        The distance comes from the pole's band edges if ``config.edges`` is set, ``image`` is
+        given and they are found (:func:`perception.vision.pole_edges.pole_edge_distance`),
+        else from the box extents (:class:`PoleRangeModel`).
+        """
         box = detection.box
         if not (box[2] - box[0] > 0.5 and box[3] - box[1] > 0.5):
             return None
-        rays = _pole_rays(box, detection.keypoint, self.camera, state.rotation())
+        rotation = state.rotation()
+        rays = _pole_rays(box, detection.keypoint, self.camera, rotation)
         extents = _extents_from_rays(rays, self.camera)
         distance, rel_var, _ = self.range_model.distance(extents, box, self.camera)
+        edges = self.config.edges
+        if edges is not None and image is not None:
+            fit = pole_edge_distance(
+                image,
+                box,
+                detection.keypoint,
+                vertical_lean(box, self.camera, rotation),
+                self.camera,
+                rotation,
+                float(state.position[2]),
+                self.pole,
+                edges,
+            )
+            if fit is not None:
+                distance = fit.distance_m
+                rel_var = fit.relative_variance(edges.row_std_px, self.camera.fx)
         range_m, bearing = _axis_range_bearing(rays[0], distance, state.position[:2])
         var_bearing = (self.range_model.bearing_std_px / self.camera.fx) ** 2
         return LandmarkObservation(

@@ -441,6 +441,8 @@ class TrainConfig:
     weight_decay: float = 1e-4
     seed: int = 0
     threads: int = 2  # torch intra-op threads while training
+    channels: tuple[int, int, int, int] = NetConfig.channels  # of the network's four stages
+    head_channels: int = NetConfig.head_channels
 
     def __post_init__(self) -> None:
         for name in ("epochs", "batch_size", "threads"):
@@ -451,6 +453,7 @@ class TrainConfig:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"TrainConfig.{name} must be finite and > 0, got {value!r}")
+        NetConfig(channels=self.channels, head_channels=self.head_channels)  # raises if bad
         if not (math.isfinite(self.weight_decay) and self.weight_decay >= 0):
             raise ValueError(
                 f"TrainConfig.weight_decay must be finite and >= 0, got {self.weight_decay!r}"
@@ -493,7 +496,11 @@ def train(
     torch.manual_seed(config.seed)
     rng = np.random.default_rng(config.seed)
     torch.set_num_threads(config.threads)
-    net = PoleNet(NetConfig(n_classes=n_classes))
+    net = PoleNet(
+        NetConfig(
+            channels=config.channels, head_channels=config.head_channels, n_classes=n_classes
+        )
+    )
     optimiser = torch.optim.AdamW(
         net.parameters(), lr=config.learning_rate, weight_decay=config.weight_decay
     )
@@ -598,9 +605,16 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=TrainConfig.seed)
     parser.add_argument("--minutes", type=float, default=TrainConfig.minutes)
     parser.add_argument("--threads", type=int, default=TrainConfig.threads)
+    parser.add_argument("--channels", type=int, nargs=4, default=list(TrainConfig.channels))
+    parser.add_argument("--head-channels", type=int, default=TrainConfig.head_channels)
     args = parser.parse_args()
     config = TrainConfig(
-        epochs=args.epochs, seed=args.seed, minutes=args.minutes, threads=args.threads
+        epochs=args.epochs,
+        seed=args.seed,
+        minutes=args.minutes,
+        threads=args.threads,
+        channels=tuple(args.channels),
+        head_channels=args.head_channels,
     )
     start = time.perf_counter()
     images, records, meta = load_dataset(args.data)

@@ -31,6 +31,7 @@ from perception.vision.cnn_model import (
     encode,
     fuse_batch_norms,
 )
+from perception.vision.train_detector import TrainConfig
 
 CAMERA = CameraModel()
 POLE = PoleGeometry()
@@ -323,3 +324,13 @@ def test_bad_config_and_setup_rejected(tmp_path: Path) -> None:
     torch.save({"state_dict": {}}, bogus)
     with pytest.raises(ValueError, match="weights file"):
         CnnPoleDetector(CnnDetectorConfig(weights=bogus), CAMERA, CODES, POLE)
+
+
+def test_train_config_checks_the_network_shape() -> None:
+    assert TrainConfig(channels=(8, 16, 24, 32), head_channels=16).channels == (8, 16, 24, 32)
+    with pytest.raises(ValueError, match="channels"):
+        TrainConfig(channels=(8, 16, 0, 32))
+    with pytest.raises(ValueError, match="head_channels"):
+        TrainConfig(head_channels=-1)
+    with pytest.raises(ValueError, match="epochs"):
+        TrainConfig(epochs=0)

@@ -1,0 +1,250 @@
+"""Pole distance from band edges: exact on drawn poles, sub-pixel on blended edges, rejection of
+edges off the line, and on rendered frames against the labels' true range."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from perception.types import CameraModel, CameraState, PoleCode, PoleGeometry
+from perception.vision import CnnDetectorConfig, CnnPoleDetector, Detection
+from perception.vision.cnn_detector import vertical_lean
+from perception.vision.pole_edges import (
+    EdgeFit,
+    PoleEdgeConfig,
+    edge_heights,
+    expected_rows,
+    pole_edge_distance,
+)
+from spl_env.datasets import DatasetConfig, generate
+
+CAMERA = CameraModel()
+POLE = PoleGeometry()
+CONFIG = PoleEdgeConfig()
+LEVEL = np.eye(3)  # a level camera looking along the robot's x axis
+COLOURS = {  # from the top down: background, upper band, lower band, white base, carpet
+    "sky": (230, 230, 235),
+    "pink": (230, 60, 160),
+    "blue": (40, 70, 200),
+    "white": (245, 245, 245),
+    "carpet": (40, 140, 60),
+}
+
+
+def draw_pole(surface_m: float, camera_height_m: float, half_width_px: int = 4) -> np.ndarray:
+    """A level camera's image of a pole straight ahead with its near surface ``surface_m`` away:
+    each pixel row covering [j - 0.5, j + 0.5] mixes the colours of the heights it spans by
+    area (the analytic image, edges at sub-pixel rows)."""
+    image = np.zeros((CAMERA.height, CAMERA.width, 3), np.float64)
+    z = edge_heights(POLE)  # top, junction, base, bottom
+    boundaries = CAMERA.cy - CAMERA.fy * (z - camera_height_m) / surface_m  # rows, rising
+    segments = [  # (row from, row to, colour)
+        (-1.0, boundaries[0], COLOURS["sky"]),
+        (boundaries[0], boundaries[1], COLOURS["pink"]),
+        (boundaries[1], boundaries[2], COLOURS["blue"]),
+        (boundaries[2], boundaries[3], COLOURS["white"]),
+        (boundaries[3], CAMERA.height + 1.0, COLOURS["carpet"]),
+    ]
+    behind = [(-1.0, boundaries[3], COLOURS["sky"]), segments[-1]]  # beside the pole
+    u = int(CAMERA.cx)
+    pole_columns = slice(u - half_width_px, u + half_width_px + 1)
+    for j in range(CAMERA.height):
+        for parts, columns in ((behind, slice(None)), (segments, pole_columns)):
+            row = np.zeros(3)
+            for lo, hi, colour in parts:
+                row += max(0.0, min(hi, j + 0.5) - max(lo, j - 0.5)) * np.array(colour, float)
+            image[j, columns] = row
+    return np.rint(image).astype(np.uint8)
+
+
+def detection_of(surface_m: float, camera_height_m: float, error_px: float = 0.0) -> tuple:
+    """Box (4,) and junction keypoint (2,) of the drawn pole, shifted by ``error_px`` like a
+    detector's regression error."""
+    z = edge_heights(POLE)
+    rows = CAMERA.cy - CAMERA.fy * (z - camera_height_m) / surface_m
+    box = np.array([CAMERA.cx - 4.5, rows[0] + error_px, CAMERA.cx + 4.5, rows[3] - error_px])
+    return box, np.array([CAMERA.cx, rows[1] + error_px])
+
+
+def fit(image: np.ndarray, box: np.ndarray, keypoint: np.ndarray, height: float) -> EdgeFit | None:
+    return pole_edge_distance(image, box, keypoint, 0.0, CAMERA, LEVEL, height, POLE, CONFIG)
+
+
+def test_edges_on_pixel_boundaries_give_the_exact_distance() -> None:
+    # bands of exactly 25 px whose edges fall between rows: the fit has no quantisation error
+    surface = CAMERA.fy * POLE.band_height_m / 25.0
+    height = 0.564  # puts the top edge at row 90.5
+    image = draw_pole(surface, height)
+    box, keypoint = detection_of(surface, height, error_px=1.5)
+    result = fit(image, box, keypoint, height)
+    assert result is not None
+    assert result.edges == ("top", "junction", "base", "bottom")
+    np.testing.assert_allclose(result.rows, [90.5, 115.5, 140.5, 190.5], atol=1e-9)
+    assert result.distance_m == pytest.approx(surface + POLE.radius_m, rel=1e-9)
+    assert result.rms_px == pytest.approx(0.0, abs=1e-9)
+
+
+@pytest.mark.parametrize("surface_m", [1.7, 2.6, 3.9, 5.3])
+def test_blended_edges_give_sub_pixel_distance(surface_m: float) -> None:
+    height = 0.53
+    image = draw_pole(surface_m, height)
+    box, keypoint = detection_of(surface_m, height, error_px=-1.2)
+    result = fit(image, box, keypoint, height)
+    assert result is not None
+    band_px = CAMERA.fy * POLE.band_height_m / surface_m
+    # the bottom edge is searched only where bands span 20 px or more
+    near = band_px >= CONFIG.bottom_min_band_px
+    assert result.edges == ("top", "junction", "base", "bottom")[: 4 if near else 3]
+    z = edge_heights(POLE)[: len(result.edges)]
+    truth = CAMERA.cy - CAMERA.fy * (z - height) / surface_m
+    # a parabola through a split edge is off by less than a third of a pixel
+    assert np.max(np.abs(result.rows - truth)) < 0.3
+    # rows within 0.3 px over two band heights or more bound the distance's relative error
+    bound = 0.3 / band_px
+    assert abs(result.distance_m - (surface_m + POLE.radius_m)) / surface_m < bound
+
+
+def test_an_edge_off_the_line_is_refused() -> None:
+    surface, height = 3.0, 0.52
+    image = draw_pole(surface, height)
+    box, keypoint = detection_of(surface, height)
+    # paint the lower band's lowest 30 % white: the base edge, still inside its search window,
+    # now lies 6 px above the line through the other two
+    rows = expected_rows(box, keypoint, POLE)
+    cut = round(rows[2] - 0.3 * (rows[2] - rows[1]))
+    image[cut : int(rows[2]) + 2, int(box[0]) : int(box[2]) + 1] = COLOURS["white"]
+    assert fit(image, box, keypoint, height) is None  # three edges are needed, two agree
+    # the same pole with its own edges is measured
+    assert fit(draw_pole(surface, height), box, keypoint, height) is not None
+
+
+def test_wrong_camera_height_is_refused() -> None:
+    surface, height = 3.0, 0.52
+    image = draw_pole(surface, height)
+    box, keypoint = detection_of(surface, height)
+    assert fit(image, box, keypoint, height) is not None
+    assert fit(image, box, keypoint, height + 0.2) is None
+
+
+def test_a_pole_cut_by_the_top_border_is_measured_from_the_rest() -> None:
+    surface, height = 0.9, 0.3
+    image = draw_pole(surface, height)
+    box, keypoint = detection_of(surface, height)
+    assert box[1] < 0 < keypoint[1] and box[3] < CAMERA.height  # only the top is out
+    with_bottom = fit(image, box, keypoint, height)
+    assert with_bottom is not None and with_bottom.edges == ("junction", "base", "bottom")
+    assert with_bottom.distance_m == pytest.approx(surface + POLE.radius_m, rel=0.01)
+    bands = PoleEdgeConfig(edges=("top", "junction", "base"))
+    assert pole_edge_distance(image, box, keypoint, 0.0, CAMERA, LEVEL, height, POLE, bands) is None
+
+
+def test_relative_variance_follows_least_squares() -> None:
+    surface = 3.0
+    result = EdgeFit(
+        distance_m=surface + POLE.radius_m,
+        edges=("top", "junction", "base"),
+        rows=np.zeros(3),
+        rms_px=0.0,
+        spread_m=float(np.std([0.8, 0.6, 0.4])),
+        surface_m=surface,
+    )
+    # slope fx / d; var(slope) = s^2 / sum((z - mean z)^2) = s^2 / 0.08 m^2
+    slope = CAMERA.fx / surface
+    expected = 0.3**2 / 0.08 / slope**2
+    assert result.relative_variance(0.3, CAMERA.fx) == pytest.approx(expected)
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "error"),
+    [
+        ("window_fraction", 0.0, ValueError),
+        ("row_std_px", math.nan, ValueError),
+        ("min_contrast", 5, ValueError),
+        ("edges", ("top", "middle"), ValueError),
+        ("edges", ["top", "junction"], ValueError),
+        ("bottom_min_band_px", -1.0, ValueError),
+        ("min_edges", 1, ValueError),
+        ("min_edges", 5, ValueError),  # more than the four edges
+        ("min_edges", True, ValueError),
+    ],
+)
+def test_config_refuses_bad_values(field: str, value: object, error: type) -> None:
+    with pytest.raises(error, match=field):
+        PoleEdgeConfig(**{field: value})  # type: ignore[arg-type]
+
+
+@pytest.fixture(scope="module")
+def rendered(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("poles")
+    config = DatasetConfig(
+        aim_probability=1.0, occluder_probability=0.0, blur_probability=0.0, sway_probability=0.0
+    )
+    generate(config, out, images=20, seed=11, scenes=1)
+    return out
+
+
+def test_rendered_poles_measured_against_their_true_range(rendered: Path) -> None:
+    """Label boxes and junctions of whole, unoccluded poles stand in for detections; the edge
+    distance, turned into a range from the robot origin, matches the label's true range."""
+    records = [json.loads(line) for line in (rendered / "labels.jsonl").read_text().splitlines()]
+    errors = []
+    for record in records:
+        image = cv2.cvtColor(
+            cv2.imread(str(rendered / "images" / record["image"])), cv2.COLOR_BGR2RGB
+        )
+        state = CameraState(
+            position=np.array(record["camera_state"]["position"]),
+            head_yaw=record["camera_state"]["head_yaw"],
+            head_pitch=record["camera_state"]["head_pitch"],
+            tilt=record["camera_state"]["tilt"],
+        )
+        rotation = state.rotation()
+        for obj in record["objects"]:
+            if obj["landmark_id"] is None or obj["truncated"] or obj["occluded_fraction"] > 0:
+                continue
+            if not obj["keypoint_visible"] or obj["range_m"] > 6.0:
+                continue
+            box = np.array(obj["box"], np.float64) + np.array([-0.5, -0.5, 0.5, 0.5])
+            keypoint = np.array(obj["keypoint"])
+            lean = vertical_lean(box, CAMERA, rotation)
+            result = pole_edge_distance(
+                image, box, keypoint, lean, CAMERA, rotation, state.position[2], POLE, CONFIG
+            )
+            if result is None:
+                continue
+            bearing = obj["bearing_rad"]
+            axis = obj["range_m"] * np.array([math.cos(bearing), math.sin(bearing)])
+            true_distance = float(np.linalg.norm(axis - state.position[:2]))
+            errors.append(result.distance_m / true_distance - 1.0)
+    assert len(errors) >= 6
+    # each within 4 %, the mean within 1.5 % (the CNN's box extents give 3-5 % on average)
+    assert np.max(np.abs(errors)) < 0.04
+    assert abs(float(np.mean(errors))) < 0.015
+
+
+def test_detector_measures_from_edges_when_it_has_the_image() -> None:
+    codes = [PoleCode(landmark_id=2, top="pink", bottom="blue")]
+    surface, height = 3.0, 0.52
+    image = draw_pole(surface, height)
+    box, keypoint = detection_of(surface, height, error_px=1.0)
+    detection = Detection(
+        class_name="pole_pink_blue", class_id=2, box=box, score=0.9, keypoint=keypoint
+    )
+    state = CameraState(position=np.array([0.0, 0.0, height]), head_yaw=0.0, head_pitch=0.0)
+    detector = CnnPoleDetector(CnnDetectorConfig(), CAMERA, codes, POLE)
+    with_edges = detector.observe_pole(2, detection, state, image)
+    expected = fit(image, box, keypoint, height)
+    assert with_edges is not None and expected is not None
+    assert with_edges.range_m == pytest.approx(expected.distance_m, rel=1e-9)
+    variance = expected.relative_variance(CONFIG.row_std_px, CAMERA.fx) * with_edges.range_m**2
+    assert with_edges.cov[0, 0] == pytest.approx(variance, rel=1e-9)
+    extents_only = detector.observe_pole(2, detection, state)
+    no_edges = CnnPoleDetector(CnnDetectorConfig(edges=None), CAMERA, codes, POLE)
+    assert extents_only is not None and extents_only.range_m != with_edges.range_m
+    unused = no_edges.observe_pole(2, detection, state, image)
+    assert unused is not None and unused.range_m == pytest.approx(extents_only.range_m)
