@@ -100,8 +100,10 @@ def run_random(
                 frames[name].append((detections, truth))
         bench.world.close()
 
+    lowest_frames = frames["cnn"]
+
     def above(threshold: float) -> list:
-        return [([o for o in d if o.score >= threshold], t) for d, t in frames["cnn"]]
+        return [([o for o in d if o.score >= threshold], t) for d, t in lowest_frames]
 
     frames["cnn"] = above(cnn_config.score_threshold)
     result: dict[str, Any] = {

@@ -10,8 +10,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from drawn_poles import CAMERA, COLOURS, POLE, detection_of, draw_band_across, draw_pole
 
-from perception.types import CameraModel, CameraState, PoleCode, PoleGeometry
+from perception.types import CameraState, PoleCode
 from perception.vision import CnnDetectorConfig, CnnPoleDetector, Detection
 from perception.vision.cnn_detector import vertical_lean
 from perception.vision.pole_edges import (
@@ -20,55 +21,12 @@ from perception.vision.pole_edges import (
     edge_heights,
     expected_rows,
     pole_edge_distance,
+    pole_width_distance,
 )
 from spl_env.datasets import DatasetConfig, generate
 
-CAMERA = CameraModel()
-POLE = PoleGeometry()
 CONFIG = PoleEdgeConfig()
 LEVEL = np.eye(3)  # a level camera looking along the robot's x axis
-COLOURS = {  # from the top down: background, upper band, lower band, white base, carpet
-    "sky": (230, 230, 235),
-    "pink": (230, 60, 160),
-    "blue": (40, 70, 200),
-    "white": (245, 245, 245),
-    "carpet": (40, 140, 60),
-}
-
-
-def draw_pole(surface_m: float, camera_height_m: float, half_width_px: int = 4) -> np.ndarray:
-    """A level camera's image of a pole straight ahead with its near surface ``surface_m`` away:
-    each pixel row covering [j - 0.5, j + 0.5] mixes the colours of the heights it spans by
-    area (the analytic image, edges at sub-pixel rows)."""
-    image = np.zeros((CAMERA.height, CAMERA.width, 3), np.float64)
-    z = edge_heights(POLE)  # top, junction, base, bottom
-    boundaries = CAMERA.cy - CAMERA.fy * (z - camera_height_m) / surface_m  # rows, rising
-    segments = [  # (row from, row to, colour)
-        (-1.0, boundaries[0], COLOURS["sky"]),
-        (boundaries[0], boundaries[1], COLOURS["pink"]),
-        (boundaries[1], boundaries[2], COLOURS["blue"]),
-        (boundaries[2], boundaries[3], COLOURS["white"]),
-        (boundaries[3], CAMERA.height + 1.0, COLOURS["carpet"]),
-    ]
-    behind = [(-1.0, boundaries[3], COLOURS["sky"]), segments[-1]]  # beside the pole
-    u = int(CAMERA.cx)
-    pole_columns = slice(u - half_width_px, u + half_width_px + 1)
-    for j in range(CAMERA.height):
-        for parts, columns in ((behind, slice(None)), (segments, pole_columns)):
-            row = np.zeros(3)
-            for lo, hi, colour in parts:
-                row += max(0.0, min(hi, j + 0.5) - max(lo, j - 0.5)) * np.array(colour, float)
-            image[j, columns] = row
-    return np.rint(image).astype(np.uint8)
-
-
-def detection_of(surface_m: float, camera_height_m: float, error_px: float = 0.0) -> tuple:
-    """Box (4,) and junction keypoint (2,) of the drawn pole, shifted by ``error_px`` like a
-    detector's regression error."""
-    z = edge_heights(POLE)
-    rows = CAMERA.cy - CAMERA.fy * (z - camera_height_m) / surface_m
-    box = np.array([CAMERA.cx - 4.5, rows[0] + error_px, CAMERA.cx + 4.5, rows[3] - error_px])
-    return box, np.array([CAMERA.cx, rows[1] + error_px])
 
 
 def fit(image: np.ndarray, box: np.ndarray, keypoint: np.ndarray, height: float) -> EdgeFit | None:
@@ -168,6 +126,7 @@ def test_relative_variance_follows_least_squares() -> None:
         ("edges", ("top", "middle"), ValueError),
         ("edges", ["top", "junction"], ValueError),
         ("bottom_min_band_px", -1.0, ValueError),
+        ("width_min_px", math.inf, ValueError),
         ("min_edges", 1, ValueError),
         ("min_edges", 5, ValueError),  # more than the four edges
         ("min_edges", True, ValueError),
@@ -248,3 +207,32 @@ def test_detector_measures_from_edges_when_it_has_the_image() -> None:
     assert extents_only is not None and extents_only.range_m != with_edges.range_m
     unused = no_edges.observe_pole(2, detection, state, image)
     assert unused is not None and unused.range_m == pytest.approx(extents_only.range_m)
+
+
+@pytest.mark.parametrize("distance_m", [0.7, 1.1, 1.8])
+def test_width_distance_of_a_drawn_band(distance_m: float) -> None:
+    half = CAMERA.fx * math.tan(math.asin(POLE.radius_m / distance_m))
+    junction = 60.0
+    image = draw_band_across(distance_m, (int(junction), CAMERA.height))
+    box = np.array([CAMERA.cx - half - 1.0, 0.0, CAMERA.cx + half + 1.2, CAMERA.height - 0.5])
+    keypoint = np.array([CAMERA.cx, junction])
+    result = pole_width_distance(image, box, keypoint, 0.0, CAMERA, LEVEL, POLE, CONFIG)
+    assert result is not None
+    assert result.width_px == pytest.approx(2 * half, abs=0.3)
+    # two edges within 0.15 px each over the width bound the relative error
+    assert result.distance_m == pytest.approx(distance_m, rel=0.3 / (2 * half))
+
+
+def test_width_distance_refuses_narrow_cut_and_featureless_poles() -> None:
+    image = draw_band_across(1.0, (60, CAMERA.height))
+    half = CAMERA.fx * math.tan(math.asin(POLE.radius_m / 1.0))
+    box = np.array([CAMERA.cx - half, 0.0, CAMERA.cx + half, CAMERA.height - 0.5])
+    keypoint = np.array([CAMERA.cx, 60.0])
+    assert pole_width_distance(image, box, keypoint, 0.0, CAMERA, LEVEL, POLE, CONFIG) is not None
+    narrow = PoleEdgeConfig(width_min_px=2 * half + 1)
+    assert pole_width_distance(image, box, keypoint, 0.0, CAMERA, LEVEL, POLE, narrow) is None
+    plain = np.full_like(image, 128)  # no edges to find
+    assert pole_width_distance(plain, box, keypoint, 0.0, CAMERA, LEVEL, POLE, CONFIG) is None
+    at_border = box - np.array([CAMERA.cx - half - 2, 0, CAMERA.cx - half - 2, 0])
+    shifted = keypoint - np.array([CAMERA.cx - half - 2, 0])
+    assert pole_width_distance(image, at_border, shifted, 0.0, CAMERA, LEVEL, POLE, CONFIG) is None
