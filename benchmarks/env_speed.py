@@ -70,7 +70,9 @@ def main() -> None:
     runs = [
         measure(args.env, args.steps, args.seed, {}),
         measure(args.env, args.steps, args.seed, {"randomise_lighting": True}),
-        measure(args.env, args.steps, args.seed, {"camera_mode": "geometric"}),
+        measure(
+            args.env, args.steps, args.seed, {"camera_mode": "geometric", "frontend": "colour"}
+        ),
     ]
     result = {
         "machine": {"cpu_count": os.cpu_count(), "python": platform.python_version()},

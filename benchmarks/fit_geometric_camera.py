@@ -52,7 +52,7 @@ def _policies(env: gym.Env, rng: np.random.Generator) -> dict[str, Any]:
 
 def collect(episodes: int, seconds: float, seed: int) -> dict[str, list]:
     """Per visible pole: smear, detection, rendered errors, and what the geometric model needs."""
-    env = gym.make("SPL/ActiveVision-v0", episode_s=seconds)
+    env = gym.make("SPL/ActiveVision-v0", episode_s=seconds, frontend="colour")
     core = env.unwrapped
     camera = core.config.sim.camera
     rows: dict[str, list] = {"smear": [], "detected": [], "err": [], "geometry": [], "policy": []}

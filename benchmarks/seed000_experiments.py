@@ -337,7 +337,11 @@ def consistency(runs: int, seed: int, out: Path) -> dict[str, Any]:
     # (b) simulator: geometric camera, three-minute square walks (walk odometry as it is)
     print(f"consistency: {runs} simulated 3-minute square walks (geometric camera)", flush=True)
     env = gym.make(
-        "SPL/ActiveVision-v0", camera_mode="geometric", body_behaviour="square", episode_s=180.0
+        "SPL/ActiveVision-v0",
+        camera_mode="geometric",
+        frontend="colour",
+        body_behaviour="square",
+        episode_s=180.0,
     )
     policy = load_policy("scan", env.get_wrapper_attr("config"))
     fronts = frontends_for(env, ("colour",))

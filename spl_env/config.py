@@ -52,9 +52,10 @@ class EnvConfig:
             )
         if self.perception.frontend == "cnn" and self.sim.camera_mode != "rendered":
             raise ValueError(
-                "EnvConfig.perception.frontend='cnn' needs sim.camera_mode='rendered' (the CNN "
-                f"reads pixels), got camera_mode={self.sim.camera_mode!r}; the geometric mode "
-                "emulates the colour front end"
+                "EnvConfig.perception.frontend='cnn' (the default) needs "
+                f"sim.camera_mode='rendered' (the CNN reads pixels), got camera_mode="
+                f"{self.sim.camera_mode!r}; the geometric mode emulates the colour front end: "
+                "pass frontend='colour' with it"
             )
         if self.body_behaviour not in BODY_BEHAVIOURS:
             raise ValueError(

@@ -15,7 +15,12 @@ from perception.replay import replay
 @pytest.mark.parametrize("backend", ["classic", "fej"])
 def test_replay_of_a_recording_matches_the_live_filter(backend: str) -> None:
     env = gym.make(
-        "SPL/ActiveVision-v0", camera_mode="geometric", episode_s=8.0, backend=backend, min_views=2
+        "SPL/ActiveVision-v0",
+        camera_mode="geometric",
+        frontend="colour",
+        episode_s=8.0,
+        backend=backend,
+        min_views=2,
     )
     config = env.get_wrapper_attr("config")
     policy = load_policy("scan", config)

@@ -64,7 +64,7 @@ def test_numbers_accept_numpy_scalars_as_plain_python_numbers() -> None:
 def test_caller_dicts_are_not_changed() -> None:
     camera = {"noise_std": 0.0}
     sim: dict[str, Any] = {"camera": camera}
-    config = with_overrides(EnvConfig(), sim=sim, camera_mode="geometric")
+    config = with_overrides(EnvConfig(), sim=sim, camera_mode="geometric", frontend="colour")
     assert config.sim.camera.noise_std == 0.0 and config.sim.camera_mode == "geometric"
     assert sim == {"camera": {"noise_std": 0.0}} and sim["camera"] is camera
 

@@ -139,7 +139,11 @@ def test_observe_thins_and_disturbs_with_the_configured_statistics(sim: SplSimul
 
 def test_geometric_env_passes_checker_and_is_deterministic() -> None:
     env = gym.make(
-        "SPL/ActiveVision-v0", camera_mode="geometric", episode_s=3.0, render_mode="rgb_array"
+        "SPL/ActiveVision-v0",
+        camera_mode="geometric",
+        frontend="colour",
+        episode_s=3.0,
+        render_mode="rgb_array",
     )
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
