@@ -37,8 +37,8 @@ FRONTENDS = ("colour", "cnn")
 class PipelineConfig:
     """Which front end runs, the configuration of each, and the back end's."""
 
-    # The CNN with the gated back end is the best measured combination (README, Table 4.3
-    # analogue; chosen on the tuning walks, seeds 1300-1304: 0.063 m robot / 0.099 m
+    # The CNN with the classic back end is the best measured combination (README, Table 4.3
+    # analogue; chosen on the tuning walks, seeds 1300-1304: 0.063 m robot / 0.096 m
     # landmarks against the colour filter's best 0.085 / 0.155). The geometric camera mode
     # emulates the colour filter and needs frontend="colour".
     frontend: str = "cnn"  # one of FRONTENDS
@@ -47,10 +47,10 @@ class PipelineConfig:
     # (its precision/recall balance): on the tuning walks the class confusions that pass at
     # 0.3-0.5 start a landmark in the wrong place (0.11-1.3 m landmark error), at 0.6 none do.
     cnn: CnnDetectorConfig = field(default_factory=lambda: CnnDetectorConfig(score_threshold=0.6))
-    # The seed's 0.4 m / pi/3 gate: on the tuning walks as accurate as the classic filter
-    # (0.099 vs 0.096 m landmarks) and FEJ (0.108), and it keeps a stray sighting out of the
-    # map. EkfSlamConfig() alone is seed 000's classic Algorithm 5.
-    slam: EkfSlamConfig = field(default_factory=lambda: EkfSlamConfig(backend="gated"))
+    # Seed 000's classic Algorithm 5 (the EkfSlamConfig default): with the CNN's sightings the
+    # most accurate on the tuning walks (0.096 m landmarks; gated 0.099, FEJ 0.108). The gate
+    # can lock a badly started landmark out of every correction (seed 000 §4.1).
+    slam: EkfSlamConfig = field(default_factory=EkfSlamConfig)
 
     def __post_init__(self) -> None:
         if self.frontend not in FRONTENDS:

@@ -513,7 +513,9 @@ class CnnPoleDetector:
                 )
             if fit is not None:
                 distance = fit.distance_m
-                rel_var = fit.relative_variance(edges.row_std_px, self.camera.fx)
+                rel_var = fit.relative_variance(
+                    edges.row_std_px, self.camera.fx, edges.rel_std_floor
+                )
             elif across is not None:
                 distance = across.distance_m
                 rel_var = across.relative_variance(edges.row_std_px)

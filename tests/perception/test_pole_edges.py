@@ -97,7 +97,7 @@ def test_a_pole_cut_by_the_top_border_is_measured_from_the_rest() -> None:
     with_bottom = fit(image, box, keypoint, height)
     assert with_bottom is not None and with_bottom.edges == ("junction", "base", "bottom")
     assert with_bottom.distance_m == pytest.approx(surface + POLE.radius_m, rel=0.01)
-    bands = PoleEdgeConfig(edges=("top", "junction", "base"))
+    bands = PoleEdgeConfig(searched_edges=("top", "junction", "base"))
     assert pole_edge_distance(image, box, keypoint, 0.0, CAMERA, LEVEL, height, POLE, bands) is None
 
 
@@ -115,6 +115,7 @@ def test_relative_variance_follows_least_squares() -> None:
     slope = CAMERA.fx / surface
     expected = 0.3**2 / 0.08 / slope**2
     assert result.relative_variance(0.3, CAMERA.fx) == pytest.approx(expected)
+    assert result.relative_variance(0.3, CAMERA.fx, 0.01) == pytest.approx(expected + 1e-4)
 
 
 @pytest.mark.parametrize(
@@ -123,8 +124,8 @@ def test_relative_variance_follows_least_squares() -> None:
         ("window_fraction", 0.0, ValueError),
         ("row_std_px", math.nan, ValueError),
         ("min_contrast", 5, ValueError),
-        ("edges", ("top", "middle"), ValueError),
-        ("edges", ["top", "junction"], ValueError),
+        ("searched_edges", ("top", "middle"), ValueError),
+        ("searched_edges", ["top", "junction"], ValueError),
         ("bottom_min_band_px", -1.0, ValueError),
         ("width_min_px", math.inf, ValueError),
         ("min_edges", 1, ValueError),
@@ -200,7 +201,8 @@ def test_detector_measures_from_edges_when_it_has_the_image() -> None:
     expected = fit(image, box, keypoint, height)
     assert with_edges is not None and expected is not None
     assert with_edges.range_m == pytest.approx(expected.distance_m, rel=1e-9)
-    variance = expected.relative_variance(CONFIG.row_std_px, CAMERA.fx) * with_edges.range_m**2
+    relative = expected.relative_variance(CONFIG.row_std_px, CAMERA.fx, CONFIG.rel_std_floor)
+    variance = relative * with_edges.range_m**2
     assert with_edges.cov[0, 0] == pytest.approx(variance, rel=1e-9)
     extents_only = detector.observe_pole(2, detection, state)
     no_edges = CnnPoleDetector(CnnDetectorConfig(edges=None), CAMERA, codes, POLE)

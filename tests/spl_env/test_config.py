@@ -153,6 +153,20 @@ def test_front_and_back_end_are_selected_by_name() -> None:
     assert (gated.resolved_gate, gated.resolved_min_views) == ("thresholds", 1)
 
 
+def test_default_perception_and_cnn_settings_by_name() -> None:
+    default = EnvConfig().perception
+    assert (default.frontend, default.slam.backend, default.cnn.score_threshold) == (
+        "cnn",
+        "classic",
+        0.6,
+    )
+    cnn = with_overrides(EnvConfig(), score_threshold=0.5, edges=None, check_colours=False)
+    assert cnn.perception.cnn.score_threshold == 0.5
+    assert cnn.perception.cnn.edges is None and cnn.perception.cnn.check_colours is False
+    near = with_overrides(EnvConfig(), width_min_px=20).perception.cnn.edges
+    assert near is not None and near.width_min_px == 20.0
+
+
 @pytest.mark.parametrize(
     ("overrides", "message"),
     [
