@@ -37,20 +37,26 @@ FRONTENDS = ("colour", "cnn")
 class PipelineConfig:
     """Which front end runs, the configuration of each, and the back end's."""
 
-    # The CNN with the classic back end is the best measured combination (README, Table 4.3
-    # analogue; chosen on the tuning walks, seeds 1300-1304: 0.063 m robot / 0.096 m
-    # landmarks against the colour filter's best 0.085 / 0.155). The geometric camera mode
-    # emulates the colour filter and needs frontend="colour".
+    # The CNN with the gated back end: the best measured combination that never diverged
+    # (README, "Choosing the defaults"). On the tuning walks (seeds 1300-1304) it maps as well
+    # as the classic filter (0.060 m robot / 0.099 m landmarks; classic 0.060 / 0.095, FEJ
+    # 0.062 / 0.107; the colour filter's best 0.085 / 0.155), and on one-minute patrols under
+    # default lighting (seeds 100-104) the classic and FEJ filters were thrown 4.4 / 3.7 m off
+    # by one confused sighting that the gate refused. The geometric camera mode emulates the
+    # colour filter and needs frontend="colour".
     frontend: str = "cnn"  # one of FRONTENDS
     colour_filter: ColourFilterConfig = field(default_factory=ColourFilterConfig)
-    # SLAM takes CNN detections scoring 0.6 or more, stricter than the detector's default 0.4
-    # (its precision/recall balance): on the tuning walks the class confusions that pass at
-    # 0.3-0.5 start a landmark in the wrong place (0.11-1.3 m landmark error), at 0.6 none do.
-    cnn: CnnDetectorConfig = field(default_factory=lambda: CnnDetectorConfig(score_threshold=0.6))
-    # Seed 000's classic Algorithm 5 (the EkfSlamConfig default): with the CNN's sightings the
-    # most accurate on the tuning walks (0.096 m landmarks; gated 0.099, FEJ 0.108). The gate
-    # can lock a badly started landmark out of every correction (seed 000 §4.1).
-    slam: EkfSlamConfig = field(default_factory=EkfSlamConfig)
+    # SLAM takes CNN detections scoring 0.6 or more whose two band colours are both seen,
+    # stricter than the detector's defaults (0.4, its precision/recall balance): on the tuning
+    # walks the class confusions that pass at 0.3-0.5 start a landmark in the wrong place
+    # (0.11-1.3 m landmark error), and on a patrol (seed 101) a pole whose lower band a robot
+    # hid was taken for its neighbour.
+    cnn: CnnDetectorConfig = field(
+        default_factory=lambda: CnnDetectorConfig(score_threshold=0.6, require_both_colours=True)
+    )
+    # The seed's 0.4 m / pi/3 gate. It can lock a badly started landmark out of every
+    # correction (seed 000 §4.1); EkfSlamConfig() alone is seed 000's classic Algorithm 5.
+    slam: EkfSlamConfig = field(default_factory=lambda: EkfSlamConfig(backend="gated"))
 
     def __post_init__(self) -> None:
         if self.frontend not in FRONTENDS:

@@ -104,6 +104,10 @@ class CnnDetectorConfig:
     # Drop a pole detection whose band colours contradict its class (perception.vision.
     # pole_colours); needs the image.
     check_colours: bool = True
+    # Also drop one unless both band colours are seen and named (with check_colours): a pole
+    # whose other band is hidden cannot be told from its neighbours. Off for detection; the
+    # env's SLAM front end turns it on (perception.pipeline.PipelineConfig).
+    require_both_colours: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.weights, Path):
@@ -123,11 +127,12 @@ class CnnDetectorConfig:
             raise ValueError(
                 f"CnnDetectorConfig.max_detections must be an int >= 1, got {self.max_detections!r}"
             )
-        if not isinstance(self.check_colours, bool):
-            raise TypeError(
-                "CnnDetectorConfig.check_colours must be a bool, "
-                f"got {type(self.check_colours).__name__}"
-            )
+        for name in ("check_colours", "require_both_colours"):
+            if not isinstance(getattr(self, name), bool):
+                raise TypeError(
+                    f"CnnDetectorConfig.{name} must be a bool, "
+                    f"got {type(getattr(self, name)).__name__}"
+                )
         if not (self.edges is None or isinstance(self.edges, PoleEdgeConfig)):
             raise TypeError(
                 "CnnDetectorConfig.edges must be a PoleEdgeConfig or None, "
@@ -475,54 +480,24 @@ class CnnPoleDetector:
         if not (box[2] - box[0] > 0.5 and box[3] - box[1] > 0.5):
             return None
         rotation = state.rotation()
+        lean = vertical_lean(box, self.camera, rotation)
         if self.config.check_colours and image is not None:
-            lean = vertical_lean(box, self.camera, rotation)
             rows = expected_rows(box, detection.keypoint, self.pole)
             seen = band_colours(
                 image, box, detection.keypoint, lean, rows[2] - rows[1], self._paint_hues
             )
             if colours_contradict(seen, self._colours_of[landmark_id]):
                 return None
+            if self.config.require_both_colours and None in seen:
+                return None
         rays = _pole_rays(box, detection.keypoint, self.camera, rotation)
         extents = _extents_from_rays(rays, self.camera)
         distance, rel_var, _ = self.range_model.distance(extents, box, self.camera)
-        edges = self.config.edges
-        if edges is not None and image is not None:
-            fit = pole_edge_distance(
-                image,
-                box,
-                detection.keypoint,
-                vertical_lean(box, self.camera, rotation),
-                self.camera,
-                rotation,
-                float(state.position[2]),
-                self.pole,
-                edges,
-            )
-            across = None
-            if fit is None:
-                across = pole_width_distance(
-                    image,
-                    box,
-                    detection.keypoint,
-                    vertical_lean(box, self.camera, rotation),
-                    self.camera,
-                    rotation,
-                    self.pole,
-                    edges,
-                )
-            if fit is not None:
-                distance = fit.distance_m
-                rel_var = fit.relative_variance(
-                    edges.row_std_px, self.camera.fx, edges.rel_std_floor
-                )
-            elif across is not None:
-                distance = across.distance_m
-                rel_var = across.relative_variance(edges.row_std_px)
-            elif self._touches_border(box) and (
-                max(extents.width, extents.height * 2 * self.pole.radius_m / self.pole.top_m)
-                >= edges.width_min_px
-            ):
+        if self.config.edges is not None and image is not None:
+            measured = self._ruler_distance(image, detection, lean, rotation, state)
+            if measured is not None:
+                distance, rel_var = measured
+            elif self._touches_border(box) and self._near(extents, self.config.edges):
                 return None  # a near, cut pole measured by neither: its extents mislead
         range_m, bearing = _axis_range_bearing(rays[0], distance, state.position[:2])
         var_bearing = (self.range_model.bearing_std_px / self.camera.fx) ** 2
@@ -535,6 +510,39 @@ class CnnPoleDetector:
             box=np.asarray(box, dtype=np.float64),
             score=detection.score,
         )
+
+    def _ruler_distance(
+        self,
+        image: NDArray[np.uint8],
+        detection: Detection,
+        lean: float,
+        rotation: FloatArray,
+        state: CameraState,
+    ) -> tuple[float, float] | None:
+        """Camera-to-axis distance (m) and its relative variance from the pole's band edges,
+        else from its width; None if neither measures it (``config.edges`` must be set)."""
+        edges = self.config.edges
+        assert edges is not None
+        box, keypoint = detection.box, detection.keypoint
+        height = float(state.position[2])
+        fit = pole_edge_distance(
+            image, box, keypoint, lean, self.camera, rotation, height, self.pole, edges
+        )
+        if fit is not None:
+            variance = fit.relative_variance(edges.row_std_px, self.camera.fx, edges.rel_std_floor)
+            return fit.distance_m, variance
+        across = pole_width_distance(
+            image, box, keypoint, lean, self.camera, rotation, self.pole, edges
+        )
+        if across is not None:
+            return across.distance_m, across.relative_variance(edges.row_std_px)
+        return None
+
+    def _near(self, extents: PoleExtents, edges: PoleEdgeConfig) -> bool:
+        """Whether a pole is at least ``edges.width_min_px`` wide, or as tall as a pole that
+        wide (its width may be cut by the border)."""
+        aspect = self.pole.top_m / (2 * self.pole.radius_m)
+        return max(extents.width, extents.height / aspect) >= edges.width_min_px
 
     def _touches_border(self, box: FloatArray) -> bool:
         """Whether a box (4,) pixel edges lies within ``_BORDER_PX`` of an image border."""

@@ -68,3 +68,24 @@ def test_detector_drops_a_class_its_colours_contradict() -> None:
     assert unchecked.observe_pole(5, detection("pole_blue_pink"), state, image) is not None
     with pytest.raises(TypeError, match="check_colours"):
         CnnDetectorConfig(check_colours=1)  # type: ignore[arg-type]
+
+
+def test_slam_setting_needs_both_band_colours() -> None:
+    codes = [PoleCode(landmark_id=2, top="pink", bottom="blue")]
+    surface, height = 3.0, 0.52
+    image = draw_pole(surface, height)
+    box, keypoint = detection_of(surface, height)
+    hidden = image.copy()  # a grey robot in front of the lower band
+    hidden[int(keypoint[1]) + 2 :, int(box[0]) - 3 : int(box[2]) + 4] = (128, 128, 128)
+    state = CameraState(position=np.array([0.0, 0.0, height]), head_yaw=0.0, head_pitch=0.0)
+    detection = Detection(
+        class_name="pole_pink_blue", class_id=2, box=box, score=0.9, keypoint=keypoint
+    )
+    both = CnnDetectorConfig(require_both_colours=True)
+    strict = CnnPoleDetector(both, CAMERA, codes, POLE)
+    lenient = CnnPoleDetector(CnnDetectorConfig(), CAMERA, codes, POLE)
+    band = CAMERA.fy * POLE.band_height_m / surface
+    assert band_colours(hidden, box, keypoint, 0.0, band, HUES) == ("pink", None)
+    assert strict.observe_pole(2, detection, state, image) is not None
+    assert strict.observe_pole(2, detection, state, hidden) is None
+    assert lenient.observe_pole(2, detection, state, hidden) is not None

@@ -157,9 +157,10 @@ def test_default_perception_and_cnn_settings_by_name() -> None:
     default = EnvConfig().perception
     assert (default.frontend, default.slam.backend, default.cnn.score_threshold) == (
         "cnn",
-        "classic",
+        "gated",
         0.6,
     )
+    assert default.cnn.require_both_colours
     cnn = with_overrides(EnvConfig(), score_threshold=0.5, edges=None, check_colours=False)
     assert cnn.perception.cnn.score_threshold == 0.5
     assert cnn.perception.cnn.edges is None and cnn.perception.cnn.check_colours is False
