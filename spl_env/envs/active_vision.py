@@ -37,7 +37,8 @@ class ActiveVisionEnv(gym.Env[dict[str, Any], np.ndarray]):
     π/3 from the prediction are dropped), ``"minimal_view"`` (a pole enters the map after
     ``min_views`` sightings in one place, default 3) or ``"fej"`` (first-estimates Jacobians);
     ``min_views=n`` and ``gate="thresholds" | "mahalanobis" | "none"`` combine with any back
-    end. The defaults are the combination that measured best (README, Table 4.3 analogue).
+    end. The defaults are the CNN (SLAM takes its detections scoring 0.6 or more with both
+    band colours seen) with the gated back end (README, "Choosing the defaults").
 
     **Action**: ``Box(-1, 1, (2,), float32)``, the head target: yaw ``a[0] * 119.5°`` and pitch
     from ``-38.5°`` (``a[1] = -1``, up) to ``+29.5°`` (``a[1] = 1``, down), linear in between.
@@ -88,7 +89,8 @@ class ActiveVisionEnv(gym.Env[dict[str, Any], np.ndarray]):
     instead, keeps each with the rendered pipeline's fitted chance under the frame's motion blur
     and adds fitted pixel noise, then measures with the same model. The geometric mode makes no
     false detections and ignores lighting randomisation and image noise (it was fitted under
-    default lighting). It emulates the colour front end, so it refuses ``frontend="cnn"``.
+    default lighting). It emulates the colour front end: pass ``frontend="colour"`` with it
+    (the default ``"cnn"`` is refused).
 
     Keyword arguments override :class:`spl_env.config.EnvConfig` fields by name.
 
