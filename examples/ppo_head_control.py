@@ -35,8 +35,11 @@ def main(argv: list[str] | None = None) -> None:
     for name, policy in (("ppo", model), ("head scan", scan)):
         errors = []
         for k in range(args.eval_episodes):
-            metrics = episode_metrics(run_episode(env, policy, seed=1000 + k))
-            errors.append(float(metrics["mean_position_error_m"] or 0.0))  # never None
+            error = episode_metrics(run_episode(env, policy, seed=1000 + k))[
+                "mean_position_error_m"
+            ]
+            assert error is not None  # only the landmark error can be missing
+            errors.append(error)
         print(f"{name:9s} mean SLAM position error {np.mean(errors):.3f} m")
     env.close()
 

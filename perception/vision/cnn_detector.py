@@ -60,6 +60,7 @@ from perception.vision.colour_filter import ColourFilterConfig
 from perception.vision.pole_colours import band_colours, colours_contradict, paint_hues
 from perception.vision.pole_edges import (
     PoleEdgeConfig,
+    cross_section_px,
     expected_rows,
     pole_edge_distance,
     pole_width_distance,
@@ -67,6 +68,8 @@ from perception.vision.pole_edges import (
 
 if TYPE_CHECKING:
     from torch import nn
+
+    from perception.vision.cnn_model import PoleNet
 
 OBJECT_CLASSES: tuple[str, ...] = ("goal_post", "ball", "robot")
 WEIGHTS_FORMAT = "spl-env-pole-detector-1"
@@ -76,6 +79,17 @@ POLE_OVERLAP_IOU = 0.4  # a pole detection overlapping a better one by more is t
 JUNCTION_BORDER_PX = 10.0
 _BORDER_PX = 8.0  # a box edge this close to the image border (px) is cut by it
 _MIN_EXTENT_PX = 0.5  # extents below this (a keypoint regressed past a box edge) count as this
+
+
+def cut_sides(box: FloatArray, camera: CameraModel) -> tuple[bool, bool, bool, bool]:
+    """Whether a box (4,) pixel edges ``(u0, v0, u1, v1)`` is cut by the image's left, top,
+    right and bottom border: its edge lies within ``_BORDER_PX`` of it."""
+    return (
+        bool(box[0] < _BORDER_PX - 0.5),
+        bool(box[1] < _BORDER_PX - 0.5),
+        bool(box[2] > camera.width - 0.5 - _BORDER_PX),
+        bool(box[3] > camera.height - 0.5 - _BORDER_PX),
+    )
 
 
 def pole_class_name(code: PoleCode) -> str:
@@ -218,8 +232,7 @@ class PoleRangeModel:
     def branch(self, extents: PoleExtents, box: FloatArray, camera: CameraModel) -> str:
         """Which extent of a pole with box (4,) pixel edges gives its distance: the height if
         whole, else the part on the uncut side of the junction, else the width."""
-        top_cut = box[1] < _BORDER_PX - 0.5
-        bottom_cut = box[3] > camera.height - 0.5 - _BORDER_PX
+        _, top_cut, _, bottom_cut = cut_sides(box, camera)
         expected = math.log(self.aspect_law(extents.height))
         if top_cut and bottom_cut:
             return "width"
@@ -237,9 +250,9 @@ class PoleRangeModel:
         branch = self.branch(extents, box, camera)
         size = max(getattr(extents, branch), _MIN_EXTENT_PX)
         distance = self.laws[branch](size)
-        if branch == "width" and (
-            box[0] < _BORDER_PX - 0.5 or box[2] > camera.width - 0.5 - _BORDER_PX
-        ):  # cut on every side: each size only bounds the distance from above
+        left_cut, _, right_cut, _ = cut_sides(box, camera)
+        if branch == "width" and (left_cut or right_cut):
+            # cut on every side: each size only bounds the distance from above
             distance = min(distance, self.laws["height"](extents.height))
         c0, c1 = self.rel_var[branch]
         return distance, c0 + c1 / size**2, branch
@@ -272,7 +285,7 @@ def _pole_rays(
     u0, v0, u1, v1 = (float(x) for x in box)
     uc, vc = (u0 + u1) / 2, (v0 + v1) / 2
     lean = vertical_lean(box, camera, rotation)
-    half = 0.5 * max(u1 - u0 - abs(lean) * (v1 - v0), 1.0)
+    half = 0.5 * cross_section_px(box, lean)
     points = np.array(
         [
             [uc, vc],
@@ -497,7 +510,7 @@ class CnnPoleDetector:
             measured = self._ruler_distance(image, detection, lean, rotation, state)
             if measured is not None:
                 distance, rel_var = measured
-            elif self._touches_border(box) and self._near(extents, self.config.edges):
+            elif any(cut_sides(box, self.camera)) and self._near(extents, self.config.edges):
                 return None  # a near, cut pole measured by neither: its extents mislead
         range_m, bearing = _axis_range_bearing(rays[0], distance, state.position[:2])
         var_bearing = (self.range_model.bearing_std_px / self.camera.fx) ** 2
@@ -544,15 +557,6 @@ class CnnPoleDetector:
         aspect = self.pole.top_m / (2 * self.pole.radius_m)
         return max(extents.width, extents.height / aspect) >= edges.width_min_px
 
-    def _touches_border(self, box: FloatArray) -> bool:
-        """Whether a box (4,) pixel edges lies within ``_BORDER_PX`` of an image border."""
-        return bool(
-            box[0] < _BORDER_PX - 0.5
-            or box[1] < _BORDER_PX - 0.5
-            or box[2] > self.camera.width - 0.5 - _BORDER_PX
-            or box[3] > self.camera.height - 0.5 - _BORDER_PX
-        )
-
     def _check_image(self, image: NDArray[np.uint8]) -> None:
         """Raise ``ValueError`` unless ``image`` is an (H, W, 3) uint8 array of the camera."""
         shape = (self.camera.height, self.camera.width, 3)
@@ -565,11 +569,9 @@ class CnnPoleDetector:
             raise ValueError(f"image must be a uint8 array of shape {shape}, got {got}")
 
 
-def load_network(data: dict[str, Any]) -> nn.Module:
-    """The inference network from a weights dict: eval mode, batch norms folded, channels-last."""
-    import torch
-
-    from perception.vision.cnn_model import NetConfig, PoleNet, fuse_batch_norms
+def network_from_weights(data: dict[str, Any]) -> PoleNet:
+    """The network of a weights dict, as trained (train mode, batch norms apart)."""
+    from perception.vision.cnn_model import NetConfig, PoleNet
 
     net = PoleNet(
         NetConfig(
@@ -579,5 +581,15 @@ def load_network(data: dict[str, Any]) -> nn.Module:
         )
     )
     net.load_state_dict(data["state_dict"])
+    return net
+
+
+def load_network(data: dict[str, Any]) -> nn.Module:
+    """The inference network from a weights dict: eval mode, batch norms folded, channels-last."""
+    import torch
+
+    from perception.vision.cnn_model import fuse_batch_norms
+
+    net = network_from_weights(data)
     net.eval()
     return fuse_batch_norms(net).to(memory_format=torch.channels_last)  # type: ignore[call-overload]

@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 
 from perception.geometry import FloatArray
 from perception.vision.colour_filter import ColourFilterConfig
+from perception.vision.pole_edges import cross_section_px
 
 BAND_COLOURS: tuple[str, ...] = ("pink", "yellow", "blue", "green")
 MIN_SATURATION = 60  # OpenCV S (0-255) below which a band's colour is not named
@@ -56,8 +57,7 @@ def band_colours(
     its colour cannot be named."""
     height, width = image.shape[:2]
     uc, vc = (box[0] + box[2]) / 2.0, (box[1] + box[3]) / 2.0
-    pole_px = max(float(box[2] - box[0]) - abs(lean) * float(box[3] - box[1]), 1.0)
-    half_width = int(0.25 * pole_px)
+    half_width = int(0.25 * cross_section_px(box, lean))
     named: list[str | None] = []
     for sign in (-1.0, 1.0):
         lo = keypoint[1] + sign * 0.3 * band_px

@@ -156,6 +156,18 @@ def expected_rows(box: FloatArray, keypoint: FloatArray, pole: PoleGeometry) -> 
     return np.array([top, junction, junction + band, bottom])
 
 
+def cross_section_px(box: FloatArray, lean: float) -> float:
+    """Width (px, at least 1) of a vertical pole's cross-section in a box (4,) pixel edges
+    whose image leans by ``lean`` = du/dv: the box width less the lean over its height."""
+    return max(float(box[2] - box[0]) - abs(lean) * float(box[3] - box[1]), 1.0)
+
+
+def colour_changes(profile: FloatArray) -> FloatArray:
+    """RGB distance (K - 1,) between neighbouring entries of a (K, 3) colour profile."""
+    step = profile[1:] - profile[:-1]
+    return np.sqrt((step * step).sum(axis=1))
+
+
 def row_profile_changes(
     image: NDArray[np.uint8], axis_u: FloatArray, rows: NDArray[np.int64], half_width: int
 ) -> FloatArray:
@@ -166,9 +178,7 @@ def row_profile_changes(
     width = image.shape[1]
     offsets = np.arange(-half_width, half_width + 1)
     cols = np.clip(np.rint(axis_u).astype(np.int64)[:, None] + offsets[None], 0, width - 1)
-    profile = image[rows[:, None], cols].sum(axis=1, dtype=np.int32) / len(offsets)  # (R, 3)
-    step = profile[1:] - profile[:-1]
-    return np.sqrt((step * step).sum(axis=1))
+    return colour_changes(image[rows[:, None], cols].sum(axis=1, dtype=np.int32) / len(offsets))
 
 
 def _peak(changes: FloatArray, boundaries: FloatArray, lo: float, hi: float, floor: float) -> float:
@@ -230,8 +240,7 @@ def pole_edge_distance(
     last = min(math.ceil(expected[searched].max() + window) + 1, height - 1)
     rows = np.arange(first, last + 1)
     uc, vc = (box[0] + box[2]) / 2.0, (box[1] + box[3]) / 2.0
-    pole_px = max(float(box[2] - box[0]) - abs(lean) * float(box[3] - box[1]), 1.0)
-    half_width = int(config.strip_fraction * pole_px / 2.0)
+    half_width = int(config.strip_fraction * cross_section_px(box, lean) / 2.0)
     changes = row_profile_changes(image, uc + lean * (rows - vc), rows, half_width)
     boundaries = rows[:-1] + 0.5
     found = np.full(len(EDGES), math.nan)
@@ -313,7 +322,7 @@ def pole_width_distance(
     """
     height, width = image.shape[:2]
     uc, vc = (box[0] + box[2]) / 2.0, (box[1] + box[3]) / 2.0
-    box_width = float(box[2] - box[0]) - abs(lean) * float(box[3] - box[1])
+    box_width = cross_section_px(box, lean)
     if box_width < config.width_min_px:
         return None
     # the lower band is about twice as tall as the pole is wide; keep clear of its ends
@@ -329,9 +338,7 @@ def pole_width_distance(
     cols = np.rint(centres)[:, None].astype(np.int64) + offsets[None]
     if cols.min() < 0 or cols.max() > width - 1:
         return None  # a side of the pole or its window is cut by the border
-    profile = image[rows[:, None], cols].sum(axis=0, dtype=np.int32) / len(rows)  # (K, 3)
-    step = profile[1:] - profile[:-1]
-    changes = np.sqrt((step * step).sum(axis=1))
+    changes = colour_changes(image[rows[:, None], cols].sum(axis=0, dtype=np.int32) / len(rows))
     shift = float(np.rint(centres).mean() - centres.mean())
     boundaries = offsets[:-1].astype(np.float64) + 0.5 + shift
     half = box_width / 2.0

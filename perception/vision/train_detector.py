@@ -54,6 +54,7 @@ from perception.vision.cnn_detector import (
     Detection,
     PoleRangeModel,
     PowerLaw,
+    network_from_weights,
     pole_extents,
 )
 from perception.vision.cnn_model import STRIDE, NetConfig, PoleNet, Targets, encode, focal_loss
@@ -636,14 +637,7 @@ def refit(path: Path, data_folder: Path) -> None:
     """Refit the range laws and noise of the weights at ``path`` on ``data_folder`` (the
     network is kept, and its training record with the refit command added)."""
     old = torch.load(path, map_location="cpu", weights_only=True)
-    net = PoleNet(
-        NetConfig(
-            channels=tuple(old["net"]["channels"]),
-            head_channels=int(old["net"]["head_channels"]),
-            n_classes=int(old["net"]["n_classes"]),
-        )
-    )
-    net.load_state_dict(old["state_dict"])
+    net = network_from_weights(old)
     images, records, meta = load_dataset(data_folder)
     data, fits = fit_measurement(path, net, images, records, meta)
     command = " ".join(["python -m perception.vision.train_detector", *sys.argv[1:]])

@@ -201,6 +201,10 @@ def test_detector_measures_from_edges_when_it_has_the_image() -> None:
     expected = fit(image, box, keypoint, height)
     assert with_edges is not None and expected is not None
     assert with_edges.range_m == pytest.approx(expected.distance_m, rel=1e-9)
+    # the camera sits at the robot origin: the range is the drawn pole's axis distance
+    band_px = CAMERA.fy * POLE.band_height_m / surface
+    assert with_edges.range_m == pytest.approx(surface + POLE.radius_m, rel=0.3 / band_px)
+    assert with_edges.bearing_rad == pytest.approx(0.0, abs=1e-9)
     relative = expected.relative_variance(CONFIG.row_std_px, CAMERA.fx, CONFIG.rel_std_floor)
     variance = relative * with_edges.range_m**2
     assert with_edges.cov[0, 0] == pytest.approx(variance, rel=1e-9)
