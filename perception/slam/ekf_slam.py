@@ -18,6 +18,9 @@ Symbols, as in the seed and in Thrun, Burgard & Fox, *Probabilistic Robotics*, c
 - ``K``: (3 + 2L, 2) Kalman gain ``Sigma H^T S^-1``;
 - ``y``: (2,) innovation ``z - h(mu)`` with the bearing wrapped.
 
+The correction, its gate and the checks of inputs come from :mod:`perception.estimation` and
+:mod:`perception.validation`, where (filterpy's symbols) this ``Q`` is called ``R``.
+
 The four back ends of seed 000 (§2.1.3, §3.2.1, Table 4.1), chosen by ``EkfSlamConfig.backend``:
 
 - ``"classic"``: Algorithm 5. A landmark enters the map at its first sighting; every sighting
@@ -54,10 +57,22 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from perception.estimation.gating import chi2_threshold, within_gate
+from perception.estimation.kalman import innovation_covariance, joseph_update, wrapped_residual
 from perception.geometry import FloatArray, compose, wrap_angle
 from perception.types import LandmarkObservation, SlamEstimate
+from perception.validation import (
+    check_choice,
+    check_covariance,
+    check_finite,
+    check_int,
+    check_positive,
+    finite_vector,
+    is_finite_real,
+)
 
 _MIN_RANGE_M = 1e-6  # below this a landmark estimate sits on the robot and h cannot be linearised
+_BEARING = (1,)  # index of the angle in a (range, bearing) measurement
 
 BACKENDS = ("classic", "gated", "minimal_view", "fej")  # values of EkfSlamConfig.backend
 GATES = ("none", "thresholds", "mahalanobis")  # values of EkfSlamConfig.gate
@@ -118,41 +133,24 @@ class EkfSlamConfig:
             "heading_noise_rad_per_sqrt_m",
             "rotation_noise_rad_per_sqrt_rad",
         ):
-            value = getattr(self, name)
-            if not _is_finite_nonnegative(value):
-                raise ValueError(f"EkfSlamConfig.{name} must be finite and >= 0, got {value!r}")
+            check_positive("EkfSlamConfig", name, getattr(self, name), allow_zero=True)
         std = self.initial_pose_std
-        if not (isinstance(std, tuple) and len(std) == 3 and all(map(_is_finite_nonnegative, std))):
+        if not (
+            isinstance(std, tuple)
+            and len(std) == 3
+            and all(is_finite_real(s) and s >= 0 for s in std)
+        ):
             raise ValueError(
                 "EkfSlamConfig.initial_pose_std must be a tuple of 3 finite values >= 0 "
                 f"(m, m, rad), got {std!r}"
             )
-        self._check_backend()
-        for name, (high, inclusive) in _POSITIVE_LIMITS.items():
-            _check_positive_field(name, getattr(self, name), high, inclusive)
-
-    def _check_backend(self) -> None:
-        """Check ``backend``, ``gate`` and ``min_views``."""
-        for name, allowed, optional in (("backend", BACKENDS, False), ("gate", GATES, True)):
-            value = getattr(self, name)
-            if value is None and optional:
-                continue
-            if not isinstance(value, str):
-                raise TypeError(
-                    f"EkfSlamConfig.{name} must be a str{' or None' if optional else ''}, "
-                    f"got {type(value).__name__} {value!r}"
-                )
-            if value not in allowed:
-                raise ValueError(f"EkfSlamConfig.{name} must be one of {allowed}, got {value!r}")
-        n = self.min_views
-        if n is None:
-            return
-        if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
-            raise TypeError(
-                f"EkfSlamConfig.min_views must be an int >= 1 or None, got {type(n).__name__} {n!r}"
+        check_choice("EkfSlamConfig", "backend", self.backend, BACKENDS)
+        check_choice("EkfSlamConfig", "gate", self.gate, GATES, optional=True)
+        check_int("EkfSlamConfig", "min_views", self.min_views, 1, optional=True)
+        for name, (upper, inclusive) in _POSITIVE_LIMITS.items():
+            check_positive(
+                "EkfSlamConfig", name, getattr(self, name), upper=upper, upper_inclusive=inclusive
             )
-        if n < 1:
-            raise ValueError(f"EkfSlamConfig.min_views must be >= 1 or None, got {n!r}")
 
     @property
     def resolved_min_views(self) -> int:
@@ -171,7 +169,7 @@ class EkfSlamConfig:
     @property
     def gate_mahalanobis_threshold(self) -> float:
         """Chi-square (2 dof) quantile at ``gate_probability``: ``-2 ln(1 - p)`` (unitless)."""
-        return -2.0 * math.log1p(-self.gate_probability)
+        return chi2_threshold(self.gate_probability, 2)
 
     def odometry_cov(self, odometry_delta: ArrayLike) -> FloatArray:
         """``M`` (3, 3): covariance of the odometry increment ``(dx, dy, dtheta)`` (robot frame).
@@ -183,7 +181,7 @@ class EkfSlamConfig:
             var(dtheta) = heading_noise_rad_per_sqrt_m² d
                           + rotation_noise_rad_per_sqrt_rad² |dtheta|
         """
-        dx, dy, dtheta = _finite_vector(odometry_delta, "odometry_delta", 3)
+        dx, dy, dtheta = finite_vector(odometry_delta, "odometry_delta", 3)
         dist, turn = math.hypot(dx, dy), abs(dtheta)
         var_xy = (
             self.translation_noise_m_per_sqrt_m**2 * dist
@@ -277,7 +275,11 @@ class EkfSlam:
         self._fej = config.backend == "fej"
         self._min_views = config.resolved_min_views
         self._gate = config.resolved_gate
-        self._mu = _finite_vector(initial_pose, "initial_pose", 3)
+        # only a Mahalanobis gate computes its threshold (chi2_threshold imports scipy.stats)
+        self._gate_threshold = (
+            config.gate_mahalanobis_threshold if self._gate == "mahalanobis" else math.inf
+        )
+        self._mu = finite_vector(initial_pose, "initial_pose", 3)
         self._mu[2] = wrap_angle(self._mu[2])
         self._sigma = np.diag(np.square(np.asarray(config.initial_pose_std, dtype=np.float64)))
         self._column: dict[int, int] = {}  # landmark id -> index of its x in mu
@@ -354,7 +356,7 @@ class EkfSlam:
         pose-landmark cross blocks of ``Sigma`` change: O(L) per call. FEJ takes ``G`` from
         ``p_{k+1|k} - p_{k|k-1}`` (class docstring).
         """
-        delta = _finite_vector(odometry_delta, "odometry_delta", 3)
+        delta = finite_vector(odometry_delta, "odometry_delta", 3)
         pose, G, V = motion(self._mu[:3], delta)
         if self._fej:
             G = first_estimates_motion_jacobian(pose, self._predicted_pose)
@@ -436,12 +438,10 @@ class EkfSlam:
         """``y`` (2,), ``S`` (2, 2), the nonzero block of ``H`` (2, 5) and its state indices."""
         column = self._column[landmark_id]
         z_hat, _, _ = observe(self._mu[:3], self._mu[column : column + 2])
-        y = z - z_hat
         # Bearings are angles: near ±pi (behind the robot) z - h(mu) can be off by 2 pi.
-        y[1] = wrap_angle(y[1])
+        y = wrapped_residual(z, z_hat, _BEARING)
         H, index = self._jacobian(landmark_id)
-        S = H @ self._sigma[np.ix_(index, index)] @ H.T + Q
-        return y, S, H, index
+        return y, innovation_covariance(self._sigma, H, Q, index), H, index
 
     def _passes_gate(self, y: FloatArray, S: FloatArray) -> bool:
         """Whether the gate lets a sighting with innovation ``y`` and covariance ``S`` through."""
@@ -449,7 +449,7 @@ class EkfSlam:
         if self._gate == "thresholds":
             return abs(y[0]) <= config.gate_range_m and abs(y[1]) <= config.gate_bearing_rad
         if self._gate == "mahalanobis":
-            return float(y @ np.linalg.solve(S, y)) <= config.gate_mahalanobis_threshold
+            return within_gate(y, S, self._gate_threshold)
         return True
 
     def _correct(self, landmark_id: int, z: FloatArray, Q: FloatArray) -> bool:
@@ -458,15 +458,10 @@ class EkfSlam:
         if not self._passes_gate(y, S):
             self._rejected += 1
             return False
-        sigma_Ht = self._sigma[:, index] @ H.T  # Sigma H^T (n, 2)
-        K = np.linalg.solve(S, sigma_Ht.T).T  # S is symmetric, so this is Sigma H^T S^-1
-        self._mu += K @ y
-        self._mu[2] = wrap_angle(self._mu[2])
-        # Joseph form (I-KH) Sigma (I-KH)^T + K Q K^T, a sum of PSD terms: stays PSD under rounding
-        # (and for any K), where (I-KH) Sigma can lose it. Evaluated with the sparse H in O(n^2).
-        IKH_sigma = self._sigma - K @ sigma_Ht.T
-        joseph = IKH_sigma - (IKH_sigma[:, index] @ H.T) @ K.T + K @ Q @ K.T
-        self._sigma = 0.5 * (joseph + joseph.T)
+        # Joseph form with the sparse H, O(n^2); Q is the measurement covariance (the kernel's R)
+        mu, self._sigma = joseph_update(self._mu, self._sigma, y, H, Q, index, S=S)
+        mu[2] = wrap_angle(mu[2])
+        self._mu = mu
         return True
 
     def _sight_unmapped(self, landmark_id: int, z: FloatArray, Q: FloatArray) -> bool:
@@ -523,68 +518,13 @@ def first_estimates_motion_jacobian(
     return np.array([[1.0, 0.0, -(y1 - y0)], [0.0, 1.0, x1 - x0], [0.0, 0.0, 1.0]])
 
 
-def _is_finite_real(value: object) -> bool:
-    """Whether ``value`` is a finite real number (a bool is not)."""
-    return (
-        isinstance(value, (int, float, np.integer, np.floating))
-        and not isinstance(value, bool)
-        and math.isfinite(value)
-    )
-
-
-def _is_finite_nonnegative(value: object) -> bool:
-    """Whether ``value`` is a finite real number >= 0."""
-    return _is_finite_real(value) and value >= 0  # type: ignore[operator]
-
-
-def _check_positive_field(name: str, value: object, high: float, inclusive: bool) -> None:
-    """Raise naming ``EkfSlamConfig.<name>`` unless ``value`` is a real in ``(0, high]``.
-
-    The interval is ``(0, high)`` when not ``inclusive``.
-    """
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise TypeError(
-            f"EkfSlamConfig.{name} must be a real number, got {type(value).__name__} {value!r}"
-        )
-    below_high = value <= high if inclusive else value < high
-    if not (math.isfinite(value) and value > 0 and below_high):
-        interval = f"(0, {high:g}{']' if inclusive else ')'}"
-        raise ValueError(f"EkfSlamConfig.{name} must be finite and in {interval}, got {value!r}")
-
-
-def _finite_vector(value: ArrayLike, name: str, size: int) -> FloatArray:
-    """``value`` as a new finite float64 array of shape (size,); errors name the argument."""
-    try:
-        array = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise TypeError(f"{name} must be {size} numbers, got {value!r}") from error
-    if array.shape != (size,):
-        raise ValueError(f"{name} must have shape ({size},), got shape {array.shape}")
-    if not np.isfinite(array).all():
-        raise ValueError(f"{name} must be finite, got {array}")
-    return array
-
-
 def _measurement(obs: object, name: str) -> tuple[int, FloatArray, FloatArray]:
     """Check one sighting; return its landmark id, ``z`` (2,) and ``Q`` (2, 2)."""
     if not isinstance(obs, LandmarkObservation):
         raise TypeError(f"{name} must be a LandmarkObservation, got {type(obs).__name__}")
-    landmark_id = obs.landmark_id
-    if isinstance(landmark_id, bool) or not isinstance(landmark_id, (int, np.integer)):
-        raise TypeError(f"{name}.landmark_id must be an int, got {landmark_id!r}")
-    if not (_is_finite_real(obs.range_m) and obs.range_m > 0):
-        raise ValueError(f"{name}.range_m must be finite and > 0, got {obs.range_m!r}")
-    if not _is_finite_real(obs.bearing_rad):
-        raise ValueError(f"{name}.bearing_rad must be finite, got {obs.bearing_rad!r}")
-    try:
-        Q = np.array(obs.cov, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise TypeError(f"{name}.cov must be a (2, 2) array, got {obs.cov!r}") from error
-    if Q.shape != (2, 2) or not np.isfinite(Q).all():
-        raise ValueError(f"{name}.cov must be a finite (2, 2) array, got {Q!r}")
-    (a, b), (c, d) = Q.tolist()  # plain floats: much faster than numpy for 2 x 2 checks
-    if abs(b - c) > 1e-9 * max(abs(b), abs(c)) + 1e-15:
-        raise ValueError(f"{name}.cov must be symmetric, got {Q.tolist()}")
-    if not (a > 0.0 and a * d - b * c > 0.0):  # Sylvester's criterion
-        raise ValueError(f"{name}.cov must be positive definite, got {Q.tolist()}")
-    return int(landmark_id), np.array([obs.range_m, obs.bearing_rad], dtype=np.float64), Q
+    check_int(name, "landmark_id", obs.landmark_id)
+    check_positive(name, "range_m", obs.range_m)
+    check_finite(name, "bearing_rad", obs.bearing_rad)
+    Q = check_covariance(obs.cov, f"{name}.cov", 2)
+    z = np.array([obs.range_m, obs.bearing_rad], dtype=np.float64)
+    return int(obs.landmark_id), z, Q

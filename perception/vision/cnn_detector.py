@@ -56,6 +56,7 @@ from perception.types import (
     PoleGeometry,
     pole_ids_by_colours,
 )
+from perception.validation import check_bool, check_int, check_probability
 from perception.vision.colour_filter import ColourFilterConfig
 from perception.vision.pole_colours import band_colours, colours_contradict, paint_hues
 from perception.vision.pole_edges import (
@@ -128,25 +129,12 @@ class CnnDetectorConfig:
             raise TypeError(
                 f"CnnDetectorConfig.weights must be a pathlib.Path, got {type(self.weights)}"
             )
-        if not (isinstance(self.score_threshold, float) and 0.0 < self.score_threshold < 1.0):
-            raise ValueError(
-                "CnnDetectorConfig.score_threshold must be a float in (0, 1), "
-                f"got {self.score_threshold!r}"
-            )
-        if not (
-            isinstance(self.max_detections, int)
-            and not isinstance(self.max_detections, bool)
-            and self.max_detections >= 1
-        ):
-            raise ValueError(
-                f"CnnDetectorConfig.max_detections must be an int >= 1, got {self.max_detections!r}"
-            )
+        check_probability(
+            "CnnDetectorConfig", "score_threshold", self.score_threshold, float_only=True
+        )
+        check_int("CnnDetectorConfig", "max_detections", self.max_detections, 1)
         for name in ("check_colours", "require_both_colours"):
-            if not isinstance(getattr(self, name), bool):
-                raise TypeError(
-                    f"CnnDetectorConfig.{name} must be a bool, "
-                    f"got {type(getattr(self, name)).__name__}"
-                )
+            check_bool("CnnDetectorConfig", name, getattr(self, name))
         if not (self.edges is None or isinstance(self.edges, PoleEdgeConfig)):
             raise TypeError(
                 "CnnDetectorConfig.edges must be a PoleEdgeConfig or None, "

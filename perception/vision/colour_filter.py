@@ -60,6 +60,7 @@ from perception.types import (
     PoleGeometry,
     pole_ids_by_colours,
 )
+from perception.validation import check_in_interval, check_int, check_positive
 
 HsvRange = tuple[tuple[int, int, int], tuple[int, int, int]]
 """Inclusive ``((h, s, v) low, (h, s, v) high)`` bounds, OpenCV convention."""
@@ -69,6 +70,7 @@ _SEGMENT_COLOURS: tuple[str, ...] = ("pink", *PARTNER_COLOURS)
 _HSV_MAX = (179, 255, 255)
 _JACOBIAN_STEP_PX = 0.25  # central-difference step for the covariance
 _UP_STEP = np.array([0.0, 0.0, 0.01])  # (m) along the vertical, to find its image direction
+_OWNER = "ColourFilterConfig"  # names the fields in error messages
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -107,18 +109,12 @@ class ColourFilterConfig:
     def __post_init__(self) -> None:
         for colour in (*_SEGMENT_COLOURS, "white"):
             _check_hsv_range(f"{colour}_hsv", self.hsv_range(colour))
-        if not (isinstance(self.min_segment_area_px, int) and self.min_segment_area_px >= 1):
-            raise ValueError(
-                "ColourFilterConfig.min_segment_area_px must be an int >= 1, "
-                f"got {self.min_segment_area_px!r}"
-            )
-        _check_finite("search_distance_factor", self.search_distance_factor, above=1.0)
-        _check_finite("max_height_mismatch", self.max_height_mismatch, above=1.0)
-        _check_finite("alpha_step_deg", self.alpha_step_deg, above=0.0)
-        if not (math.isfinite(self.alpha_max_deg) and 0.0 <= self.alpha_max_deg < 90.0):
-            raise ValueError(
-                f"ColourFilterConfig.alpha_max_deg must be in [0, 90), got {self.alpha_max_deg}"
-            )
+        check_int(_OWNER, "min_segment_area_px", self.min_segment_area_px, 1)
+        for name in ("search_distance_factor", "max_height_mismatch"):
+            check_in_interval(_OWNER, name, getattr(self, name), 1.0, math.inf)
+        check_positive(_OWNER, "alpha_step_deg", self.alpha_step_deg)
+        alpha_max = self.alpha_max_deg
+        check_in_interval(_OWNER, "alpha_max_deg", alpha_max, 0.0, 90.0, low_inclusive=True)
         for name in ("band_height_ratio", "band_width_ratio"):
             lo, hi = getattr(self, name)
             if not (math.isfinite(hi) and 0.0 < lo < hi):
@@ -127,8 +123,9 @@ class ColourFilterConfig:
                     f"got {getattr(self, name)}"
                 )
         fill = self.min_corridor_fill
-        if not (math.isfinite(fill) and 0.0 <= fill <= 1.0):
-            raise ValueError(f"ColourFilterConfig.min_corridor_fill must be in [0, 1], got {fill}")
+        check_in_interval(
+            _OWNER, "min_corridor_fill", fill, 0.0, 1.0, low_inclusive=True, high_inclusive=True
+        )
         for name in (
             "max_box_width_ratio",
             "corridor_width_ratio",
@@ -136,22 +133,14 @@ class ColourFilterConfig:
             "max_range_m",
             "pixel_std_px",
         ):
-            _check_finite(name, getattr(self, name), above=0.0)
+            check_positive(_OWNER, name, getattr(self, name))
         for name in ("range_std_floor_fraction", "bearing_std_floor_rad"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0.0):
-                raise ValueError(f"ColourFilterConfig.{name} must be finite and >= 0, got {value}")
+            check_positive(_OWNER, name, getattr(self, name), allow_zero=True)
 
     def hsv_range(self, colour: str) -> HsvRange:
         """The HSV range of ``colour`` (pink, yellow, blue, green or white)."""
         value: HsvRange = getattr(self, f"{colour}_hsv")
         return value
-
-
-def _check_finite(name: str, value: float, *, above: float) -> None:
-    """Raise ``ValueError`` unless config field ``name``'s ``value`` is finite and > ``above``."""
-    if not (math.isfinite(value) and value > above):
-        raise ValueError(f"ColourFilterConfig.{name} must be finite and > {above:g}, got {value}")
 
 
 def _check_hsv_range(name: str, value: HsvRange) -> None:

@@ -40,6 +40,7 @@ from numpy.typing import NDArray
 
 from perception.geometry import FloatArray, pixel_rays
 from perception.types import CameraModel, PoleGeometry
+from perception.validation import check_int, check_positive
 
 EDGES: tuple[str, ...] = ("top", "junction", "base", "bottom")
 BORDER_PX = 3.0  # an edge the detection puts nearer the image border is not searched
@@ -90,9 +91,7 @@ class PoleEdgeConfig:
             "bottom_min_band_px",
             "width_min_px",
         ):
-            value = getattr(self, name)
-            if not (isinstance(value, float) and math.isfinite(value) and value > 0):
-                raise ValueError(f"PoleEdgeConfig.{name} must be a finite float > 0, got {value!r}")
+            check_positive("PoleEdgeConfig", name, getattr(self, name), float_only=True)
         if not (
             isinstance(self.searched_edges, tuple)
             and len(set(self.searched_edges)) == len(self.searched_edges)
@@ -102,15 +101,11 @@ class PoleEdgeConfig:
                 "PoleEdgeConfig.searched_edges must be a tuple of distinct names from "
                 f"{EDGES}, got {self.searched_edges!r}"
             )
-        if not (
-            isinstance(self.min_edges, int)
-            and not isinstance(self.min_edges, bool)
-            and 2 <= self.min_edges <= len(self.searched_edges)
-        ):
+        check_int("PoleEdgeConfig", "min_edges", self.min_edges, 2)
+        if self.min_edges > len(self.searched_edges):
             raise ValueError(
-                "PoleEdgeConfig.min_edges must be an int in "
-                f"[2, len(searched_edges) = {len(self.searched_edges)}], "
-                f"got {self.min_edges!r}"
+                "PoleEdgeConfig.min_edges must be <= len(searched_edges) = "
+                f"{len(self.searched_edges)}, got {self.min_edges!r}"
             )
 
 

@@ -1,0 +1,217 @@
+"""Checks of constructor arguments and config fields, shared by the perception modules.
+
+Each check names the value as ``owner.name`` (``name`` alone when ``owner`` is ""), e.g.
+``EkfSlamConfig.gate_range_m`` or ``observations[2].range_m``, and says what was expected and
+what came::
+
+    ValueError: EkfSlamConfig.gate_range_m must be finite and in (0, inf), got -1
+
+A value of the wrong type raises :class:`InvalidTypeError`, one of the right type outside its
+domain ValueError. A bool is not a number here, although Python's ``bool`` subclasses ``int``.
+The ``check_*`` functions only raise; :func:`finite_vector` and :func:`check_covariance` also
+return the value as a new float64 array.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from perception.geometry import FloatArray
+
+_REAL = (int, float, np.integer, np.floating)  # a bool is excluded separately
+_INT = (int, np.integer)
+_SYMMETRY_RTOL = 1e-9  # covariance entries (i, j) and (j, i) may differ by this relative amount
+_SYMMETRY_ATOL = 1e-15  # ... plus this absolute amount (entries near zero)
+
+
+class InvalidTypeError(TypeError, ValueError):
+    """A value of the wrong type.
+
+    A TypeError, and also a ValueError: before these checks were shared, several configs
+    raised ValueError for any bad value, wrong types included, and code catching ValueError
+    keeps working (as numpy's ``AxisError`` is both a ValueError and an IndexError).
+    """
+
+
+def is_finite_real(value: object) -> bool:
+    """Whether ``value`` is a finite real number (a Python or numpy int or float, not a bool)."""
+    return isinstance(value, _REAL) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def check_finite(owner: str, name: str, value: object) -> None:
+    """Raise unless ``value`` is a finite real number."""
+    _check_real(owner, name, value, float_only=False)
+    if not math.isfinite(value):  # type: ignore[arg-type]
+        raise ValueError(f"{_label(owner, name)} must be finite, got {value!r}")
+
+
+def check_in_interval(
+    owner: str,
+    name: str,
+    value: object,
+    low: float,
+    high: float,
+    *,
+    low_inclusive: bool = False,
+    high_inclusive: bool = False,
+    float_only: bool = False,
+) -> None:
+    """Raise unless ``value`` is a finite real number in the interval from ``low`` to ``high``.
+
+    The interval is open at each end unless ``low_inclusive`` / ``high_inclusive``; either
+    bound may be infinite. ``float_only``: ints (and numpy scalars other than float64) are of
+    the wrong type.
+    """
+    _check_real(owner, name, value, float_only=float_only)
+    v: float = value  # type: ignore[assignment]
+    above = v >= low if low_inclusive else v > low
+    below = v <= high if high_inclusive else v < high
+    if not (math.isfinite(v) and above and below):
+        opening, closing = "[" if low_inclusive else "(", "]" if high_inclusive else ")"
+        interval = f"{opening}{low:g}, {high:g}{closing}"
+        raise ValueError(f"{_label(owner, name)} must be finite and in {interval}, got {value!r}")
+
+
+def check_positive(
+    owner: str,
+    name: str,
+    value: object,
+    *,
+    allow_zero: bool = False,
+    upper: float = math.inf,
+    upper_inclusive: bool = False,
+    float_only: bool = False,
+) -> None:
+    """Raise unless ``value`` is a finite real number > 0 (>= 0 with ``allow_zero``).
+
+    ``upper`` bounds it from above, itself allowed when ``upper_inclusive``. ``float_only`` as
+    in :func:`check_in_interval`.
+    """
+    check_in_interval(
+        owner,
+        name,
+        value,
+        0.0,
+        upper,
+        low_inclusive=allow_zero,
+        high_inclusive=upper_inclusive,
+        float_only=float_only,
+    )
+
+
+def check_probability(owner: str, name: str, value: object, *, float_only: bool = False) -> None:
+    """Raise unless ``value`` is a real number strictly between 0 and 1.
+
+    For levels of quantiles and score thresholds, where 0 and 1 are degenerate. ``float_only``
+    as in :func:`check_in_interval`.
+    """
+    check_in_interval(owner, name, value, 0.0, 1.0, float_only=float_only)
+
+
+def check_int(
+    owner: str, name: str, value: object, minimum: int | None = None, *, optional: bool = False
+) -> None:
+    """Raise unless ``value`` is an int (Python or numpy, not a bool) >= ``minimum``.
+
+    ``minimum`` None: any int. ``optional``: None is allowed too.
+    """
+    if value is None and optional:
+        return
+    expected = "an int" + ("" if minimum is None else f" >= {minimum}")
+    expected += " or None" if optional else ""
+    if isinstance(value, bool) or not isinstance(value, _INT):
+        raise InvalidTypeError(f"{_label(owner, name)} must be {expected}, got {_got(value)}")
+    if minimum is not None and value < minimum:
+        raise ValueError(f"{_label(owner, name)} must be {expected}, got {value!r}")
+
+
+def check_bool(owner: str, name: str, value: object) -> None:
+    """Raise unless ``value`` is a bool."""
+    if not isinstance(value, bool):
+        raise InvalidTypeError(f"{_label(owner, name)} must be a bool, got {_got(value)}")
+
+
+def check_choice(
+    owner: str, name: str, value: object, choices: Sequence[str], *, optional: bool = False
+) -> None:
+    """Raise unless ``value`` is one of the strings ``choices`` (or None when ``optional``)."""
+    if value is None and optional:
+        return
+    if not isinstance(value, str):
+        raise InvalidTypeError(
+            f"{_label(owner, name)} must be a str{' or None' if optional else ''}, "
+            f"got {_got(value)}"
+        )
+    if value not in choices:
+        raise ValueError(f"{_label(owner, name)} must be one of {tuple(choices)}, got {value!r}")
+
+
+def finite_vector(value: ArrayLike, name: str, size: int) -> FloatArray:
+    """``value`` as a new finite float64 array of shape (size,); errors name the argument."""
+    try:
+        array = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError) as error:
+        raise InvalidTypeError(f"{name} must be {size} numbers, got {value!r}") from error
+    if array.shape != (size,):
+        raise ValueError(f"{name} must have shape ({size},), got shape {array.shape}")
+    if not np.isfinite(array).all():
+        raise ValueError(f"{name} must be finite, got {array}")
+    return array
+
+
+def check_covariance(matrix: ArrayLike, name: str, size: int) -> FloatArray:
+    """``matrix`` as a new float64 (size, size) array; raise unless it is a covariance.
+
+    A covariance here is finite, symmetric (entries (i, j) and (j, i) agree to a relative 1e-9)
+    and positive definite. Errors name the argument ``name``.
+    """
+    try:
+        C = np.array(matrix, dtype=np.float64)
+    except (TypeError, ValueError) as error:
+        expected = f"a ({size}, {size}) array"
+        raise InvalidTypeError(f"{name} must be {expected}, got {matrix!r}") from error
+    if C.shape != (size, size) or not np.isfinite(C).all():
+        raise ValueError(f"{name} must be a finite ({size}, {size}) array, got {C!r}")
+    if size == 2:  # plain floats: much faster than numpy for the many 2 x 2 measurement checks
+        (a, b), (c, d) = C.tolist()
+        symmetric = abs(b - c) <= _SYMMETRY_RTOL * max(abs(b), abs(c)) + _SYMMETRY_ATOL
+        positive = a > 0.0 and a * d - b * c > 0.0  # Sylvester's criterion
+    else:
+        tolerance = _SYMMETRY_RTOL * np.maximum(np.abs(C), np.abs(C.T)) + _SYMMETRY_ATOL
+        symmetric = bool((np.abs(C - C.T) <= tolerance).all())
+        positive = symmetric and _has_cholesky(C)
+    if not symmetric:
+        raise ValueError(f"{name} must be symmetric, got {C.tolist()}")
+    if not positive:
+        raise ValueError(f"{name} must be positive definite, got {C.tolist()}")
+    return C
+
+
+def _has_cholesky(C: FloatArray) -> bool:
+    """Whether the symmetric ``C`` (n, n) has a Cholesky factor, i.e. is positive definite."""
+    try:
+        np.linalg.cholesky(C)
+    except np.linalg.LinAlgError:
+        return False
+    return True
+
+
+def _check_real(owner: str, name: str, value: object, *, float_only: bool) -> None:
+    """Raise :class:`InvalidTypeError` unless ``value`` is a real number (a float if asked)."""
+    if isinstance(value, bool) or not isinstance(value, float if float_only else _REAL):
+        expected = "a float" if float_only else "a real number"
+        raise InvalidTypeError(f"{_label(owner, name)} must be {expected}, got {_got(value)}")
+
+
+def _label(owner: str, name: str) -> str:
+    """``owner.name``, or ``name`` when there is no owner."""
+    return f"{owner}.{name}" if owner else name
+
+
+def _got(value: object) -> str:
+    """A value for an error message, with its type: ``str '0.4'``."""
+    return f"{type(value).__name__} {value!r}"

@@ -1,0 +1,224 @@
+"""The shared validators: what they accept, what they reject, and what their messages say."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from perception.validation import (
+    InvalidTypeError,
+    check_bool,
+    check_choice,
+    check_covariance,
+    check_finite,
+    check_in_interval,
+    check_int,
+    check_positive,
+    check_probability,
+    finite_vector,
+    is_finite_real,
+)
+
+NOT_NUMBERS = [True, False, np.bool_(True), "1.0", None, [1.0], 1j]
+
+
+def test_a_type_error_is_also_a_value_error() -> None:
+    assert issubclass(InvalidTypeError, TypeError)
+    assert issubclass(InvalidTypeError, ValueError)
+
+
+@pytest.mark.parametrize("value", [0, 1.5, -2, np.float32(0.5), np.int64(3), np.float64(-1e300)])
+def test_finite_reals(value: object) -> None:
+    assert is_finite_real(value)
+    check_finite("Config", "field", value)
+
+
+@pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf, *NOT_NUMBERS])
+def test_not_finite_reals(value: object) -> None:
+    assert not is_finite_real(value)
+
+
+@pytest.mark.parametrize("value", [math.nan, math.inf, np.float64(-np.inf)])
+def test_check_finite_message(value: object) -> None:
+    expected = f"Config.field must be finite, got {value!r}"
+    with pytest.raises(ValueError, match=f"^{re.escape(expected)}$"):
+        check_finite("Config", "field", value)
+
+
+@pytest.mark.parametrize("value", NOT_NUMBERS)
+def test_wrong_types_raise_type_errors_naming_the_argument(value: object) -> None:
+    kind = type(value).__name__
+    for check in (check_finite, check_positive, check_probability):
+        with pytest.raises(TypeError, match=rf"^Config\.field must be a real number, got {kind} "):
+            check("Config", "field", value)
+    with pytest.raises(TypeError, match=rf"^Config\.count must be an int, got {kind} "):
+        check_int("Config", "count", value)
+
+
+def test_the_message_of_the_brief() -> None:
+    with pytest.raises(ValueError) as info:
+        check_positive("EkfSlamConfig", "gate_range_m", -1)
+    assert str(info.value) == "EkfSlamConfig.gate_range_m must be finite and in (0, inf), got -1"
+    assert not isinstance(info.value, TypeError)
+
+
+def test_without_an_owner_the_name_stands_alone() -> None:
+    with pytest.raises(ValueError, match=r"^probability must be finite and in \(0, 1\), got 2$"):
+        check_probability("", "probability", 2)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "good", "bad", "interval"),
+    [
+        ({}, [1e-300, 1, 5.0], [0, -1.0, math.inf, math.nan], "(0, inf)"),
+        ({"allow_zero": True}, [0, 0.0, 2.0], [-1e-300, math.inf], "[0, inf)"),
+        ({"upper": math.pi, "upper_inclusive": True}, [math.pi, 1.0], [3.2, 0.0], "(0, 3.14159]"),
+        ({"upper": 1.0}, [0.5, 1 - 1e-16], [1.0, 1.5], "(0, 1)"),
+    ],
+)
+def test_check_positive(
+    kwargs: dict[str, object], good: list[float], bad: list[float], interval: str
+) -> None:
+    for value in good:
+        check_positive("Config", "field", value, **kwargs)  # type: ignore[arg-type]
+    for value in bad:
+        expected = f"Config.field must be finite and in {interval}, got {value!r}"
+        with pytest.raises(ValueError, match=f"^{re.escape(expected)}$"):
+            check_positive("Config", "field", value, **kwargs)  # type: ignore[arg-type]
+
+
+@given(
+    value=st.floats(allow_nan=True, allow_infinity=True),
+    low=st.floats(-10.0, 10.0),
+    width=st.floats(0.0, 10.0),
+    low_inclusive=st.booleans(),
+    high_inclusive=st.booleans(),
+)
+def test_check_in_interval_agrees_with_the_definition(
+    value: float, low: float, width: float, low_inclusive: bool, high_inclusive: bool
+) -> None:
+    high = low + width
+    inside = (
+        math.isfinite(value)
+        and (low <= value if low_inclusive else low < value)
+        and (value <= high if high_inclusive else value < high)
+    )
+    kwargs = {"low_inclusive": low_inclusive, "high_inclusive": high_inclusive}
+    if inside:
+        check_in_interval("Config", "field", value, low, high, **kwargs)
+    else:
+        with pytest.raises(ValueError, match=r"^Config\.field must be finite and in "):
+            check_in_interval("Config", "field", value, low, high, **kwargs)
+
+
+def test_float_only_refuses_ints() -> None:
+    check_positive("Config", "field", np.float64(2.0), float_only=True)
+    for value in (2, np.int64(2), np.float32(2.0)):
+        with pytest.raises(InvalidTypeError, match=r"^Config\.field must be a float, got "):
+            check_positive("Config", "field", value, float_only=True)
+    with pytest.raises(InvalidTypeError, match="must be a float"):
+        check_probability("Config", "field", 0, float_only=True)
+
+
+@pytest.mark.parametrize("value", [1e-12, 0.5, 1 - 1e-12])
+def test_probabilities(value: float) -> None:
+    check_probability("Config", "p", value)
+
+
+@pytest.mark.parametrize("value", [0, 0.0, 1.0, -0.1, 1.1, math.nan])
+def test_not_probabilities(value: float) -> None:
+    with pytest.raises(ValueError, match=r"^Config\.p must be finite and in \(0, 1\), got "):
+        check_probability("Config", "p", value)
+
+
+def test_check_int() -> None:
+    for value in (1, np.int64(5), np.uint8(2), -3):
+        check_int("Config", "n", value)
+    check_int("Config", "n", 1, 1)
+    check_int("Config", "n", None, 1, optional=True)
+    with pytest.raises(ValueError, match=r"^Config\.n must be an int >= 1, got 0$"):
+        check_int("Config", "n", 0, 1)
+    with pytest.raises(ValueError, match=r"^Config\.n must be an int >= 1 or None, got -2$"):
+        check_int("Config", "n", -2, 1, optional=True)
+    with pytest.raises(TypeError, match=r"^Config\.n must be an int >= 2, got float 2\.0$"):
+        check_int("Config", "n", 2.0, 2)
+    with pytest.raises(TypeError, match=r"^Config\.n must be an int >= 1, got bool True$"):
+        check_int("Config", "n", True, 1)
+    with pytest.raises(TypeError, match=r"^Config\.n must be an int, got NoneType None$"):
+        check_int("Config", "n", None)
+
+
+def test_check_bool() -> None:
+    check_bool("Config", "flag", False)
+    for value in (1, 0, np.bool_(True), "True", None):
+        with pytest.raises(TypeError, match=r"^Config\.flag must be a bool, got "):
+            check_bool("Config", "flag", value)
+
+
+def test_check_choice() -> None:
+    choices = ("a", "b")
+    check_choice("Config", "mode", "a", choices)
+    check_choice("Config", "mode", None, choices, optional=True)
+    with pytest.raises(ValueError, match=r"^Config\.mode must be one of \('a', 'b'\), got 'A'$"):
+        check_choice("Config", "mode", "A", choices)
+    with pytest.raises(TypeError, match=r"^Config\.mode must be a str, got NoneType None$"):
+        check_choice("Config", "mode", None, choices)
+    with pytest.raises(TypeError, match=r"^Config\.mode must be a str or None, got int 1$"):
+        check_choice("Config", "mode", 1, ["a", "b"], optional=True)
+
+
+def test_finite_vector() -> None:
+    source = [1, 2.5, -3]
+    vector = finite_vector(source, "v", 3)
+    assert vector.dtype == np.float64
+    np.testing.assert_array_equal(vector, source)
+    array = np.zeros(2)
+    assert finite_vector(array, "v", 2) is not array  # a new array
+    with pytest.raises(ValueError, match=r"^v must have shape \(3,\), got shape \(2,\)$"):
+        finite_vector([1.0, 2.0], "v", 3)
+    with pytest.raises(ValueError, match=r"^v must have shape \(2,\), got shape \(1, 2\)$"):
+        finite_vector([[1.0, 2.0]], "v", 2)
+    with pytest.raises(ValueError, match=r"^v must be finite"):
+        finite_vector([1.0, math.inf], "v", 2)
+    with pytest.raises(TypeError, match=r"^v must be 2 numbers, got 'ab'$"):
+        finite_vector("ab", "v", 2)
+
+
+@pytest.mark.parametrize("size", [1, 2, 3, 5])
+def test_check_covariance_accepts_covariances(size: int) -> None:
+    rng = np.random.default_rng(size)
+    A = rng.normal(size=(size, size))
+    C = A @ A.T + 1e-3 * np.eye(size)
+    C[0, -1] *= 1 + 1e-12  # rounding-level asymmetry is tolerated
+    checked = check_covariance(C.tolist(), "C", size)
+    assert checked.dtype == np.float64
+    np.testing.assert_array_equal(checked, C)
+
+
+@pytest.mark.parametrize("size", [2, 3])
+def test_check_covariance_rejects_what_is_not_one(size: int) -> None:
+    eye = np.eye(size)
+    asymmetric = eye.copy()
+    asymmetric[0, 1] = 0.1
+    indefinite = eye.copy()
+    indefinite[-1, -1] = -1.0
+    singular = eye.copy()
+    singular[0, 0] = 0.0
+    cases = [
+        (asymmetric, "symmetric"),
+        (indefinite, "positive definite"),
+        (singular, "positive definite"),
+        (np.where(eye > 0, math.nan, 0.0), rf"a finite \({size}, {size}\) array"),
+        (np.eye(size + 1), rf"a finite \({size}, {size}\) array"),
+        (np.ones(size), rf"a finite \({size}, {size}\) array"),
+    ]
+    for matrix, what in cases:
+        with pytest.raises(ValueError, match=rf"^C must be {what}"):
+            check_covariance(matrix, "C", size)
+    with pytest.raises(TypeError, match=rf"^C must be a \({size}, {size}\) array, got 'x'$"):
+        check_covariance("x", "C", size)
