@@ -32,7 +32,7 @@ through the box centre, turned into the robot frame by the camera state, gives t
 the pole axis lies ``d`` along it from the camera, and its range and bearing from the robot
 origin are the measurement. The covariance is diagonal: relative range variance
 ``c0 + c1 / extent_px ** 2`` per extent and bearing std ``bearing_std_px / fx``, all fitted on
-the training set by ``perception.vision.train_detector`` and stored with the weights.
+the training set by ``training.train_detector`` and stored with the weights.
 """
 
 from __future__ import annotations

@@ -8,19 +8,23 @@ max-range value.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from perception.geometry import FloatArray
+from perception.sensor_models import LaserModel
 from spl_env.sensors.raycast import RayCaster, cast, fan_rays
 
 
 @dataclass(frozen=True, kw_only=True)
 class LaserConfig:
-    """Beam layout, range and noise of the laser (defaults: seed 001's Hokuyo UST-30LX set-up)."""
+    """Beam layout, range and noise of the laser (defaults: seed 001's Hokuyo UST-30LX set-up).
+
+    The fields are those of :class:`perception.sensor_models.LaserModel`, which validates them
+    (``ValueError`` naming the field) and which :attr:`model` builds.
+    """
 
     n_beams: int = 180  # beams, evenly spaced over the field of view
     fov_deg: float = 180.0  # field of view, centred on the robot's heading
@@ -31,34 +35,29 @@ class LaserConfig:
     mount_x_m: float = 0.0  # scanner centre ahead of the robot origin
 
     def __post_init__(self) -> None:
-        if not isinstance(self.n_beams, int) or isinstance(self.n_beams, bool) or self.n_beams < 1:
-            raise ValueError(f"laser.n_beams must be an int >= 1, got {self.n_beams!r}")
-        if not (0.0 < self.fov_deg <= 360.0):
-            raise ValueError(f"laser.fov_deg must be in (0, 360], got {self.fov_deg}")
-        for name in ("min_range_m", "max_range_m", "mount_height_m"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"laser.{name} must be finite and > 0, got {value}")
-        if self.min_range_m >= self.max_range_m:
-            raise ValueError(
-                f"laser.min_range_m must be < max_range_m, "
-                f"got {self.min_range_m} >= {self.max_range_m}"
-            )
-        if not (math.isfinite(self.range_noise_std_m) and self.range_noise_std_m >= 0):
-            raise ValueError(
-                f"laser.range_noise_std_m must be finite and >= 0, got {self.range_noise_std_m}"
-            )
-        if not math.isfinite(self.mount_x_m):
-            raise ValueError(f"laser.mount_x_m must be finite, got {self.mount_x_m}")
+        _ = self.model  # building the model validates the fields
+
+    @property
+    def model(self) -> LaserModel:
+        """The laser's geometry and noise, as perception interprets its scans."""
+        return LaserModel(
+            n_beams=self.n_beams,
+            fov_deg=self.fov_deg,
+            min_range_m=self.min_range_m,
+            max_range_m=self.max_range_m,
+            range_noise_std_m=self.range_noise_std_m,
+            mount_x_m=self.mount_x_m,
+            mount_height_m=self.mount_height_m,
+        )
 
 
 class Laser:
-    """Ray-cast planar laser scanner."""
+    """Ray-cast planar laser scanner; ``model`` is the geometry and noise it scans with."""
 
     def __init__(self, config: LaserConfig) -> None:
         self.config = config
-        fov = math.radians(config.fov_deg)
-        self._angles = -0.5 * fov + fov * np.arange(config.n_beams) / config.n_beams
+        self.model = config.model
+        self._angles = self.model.beam_angles()
 
     def beam_angles(self) -> FloatArray:
         """Beam directions (n_beams,) in the robot frame (rad, 0 = forward, + = left)."""
@@ -66,13 +65,13 @@ class Laser:
 
     def rays(self, robot_pose: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Field-frame beam (starts, ends), each (n_beams, 3) (m), for the (3,) field pose."""
-        c = self.config
+        m = self.model
         return fan_rays(
             robot_pose,
-            mount_x_m=c.mount_x_m,
-            mount_height_m=c.mount_height_m,
+            mount_x_m=m.mount_x_m,
+            mount_height_m=m.mount_height_m,
             angles=self._angles,
-            length_m=c.max_range_m,
+            length_m=m.max_range_m,
         )
 
     def measure(
@@ -86,8 +85,8 @@ class Laser:
 
         ``ignore_body`` is the robot's own body id, whose hits count as no return.
         """
-        c = self.config
+        m = self.model
         distances, _ = cast(ray_caster, *self.rays(robot_pose), ignore_body)
-        noisy = distances + c.range_noise_std_m * rng.standard_normal(c.n_beams)
-        in_range = (noisy >= c.min_range_m) & (noisy <= c.max_range_m)
+        noisy = distances + m.range_noise_std_m * rng.standard_normal(m.n_beams)
+        in_range = (noisy >= m.min_range_m) & (noisy <= m.max_range_m)
         return np.where(in_range, noisy, np.nan)

@@ -16,19 +16,24 @@ lost with the dropout probability, and is dropped (never clipped) when outside t
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from perception.geometry import FloatArray
+from perception.sensor_models import N_SONAR_SECTORS, SonarModel
 from spl_env.sensors.raycast import RayCaster, cast, fan_rays
 
 
 @dataclass(frozen=True, kw_only=True)
 class SonarConfig:
-    """Geometry and noise of the Nao chest sonar."""
+    """Geometry and noise of the Nao chest sonar.
+
+    All fields but ``rays_per_sector`` and ``dropout_probability`` are those of
+    :class:`perception.sensor_models.SonarModel`, which validates them (``ValueError`` naming
+    the field) and which :attr:`model` builds.
+    """
 
     mount_height_m: float = 0.30  # transducers on the chest, above the ground
     mount_x_m: float = 0.05  # ahead of the robot origin (Nao: 0.048-0.054 m ahead of the torso)
@@ -43,53 +48,48 @@ class SonarConfig:
     dropout_probability: float = 0.02  # chance that an echo is lost
 
     def __post_init__(self) -> None:
-        for name in ("mount_height_m", "min_range_m", "max_range_m", "echo_merge_m"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"sonar.{name} must be finite and > 0, got {value}")
-        if self.min_range_m >= self.max_range_m:
-            raise ValueError(
-                f"sonar.min_range_m must be < max_range_m, "
-                f"got {self.min_range_m} >= {self.max_range_m}"
-            )
-        if not math.isfinite(self.mount_x_m):
-            raise ValueError(f"sonar.mount_x_m must be finite, got {self.mount_x_m}")
-        if len(self.sector_centres_deg) != 3 or not all(
-            math.isfinite(c) for c in self.sector_centres_deg
+        _ = self.model  # building the model validates the fields it shares
+        if (
+            not isinstance(self.rays_per_sector, int)
+            or isinstance(self.rays_per_sector, bool)
+            or self.rays_per_sector < 1
         ):
             raise ValueError(
-                f"sonar.sector_centres_deg must be 3 finite angles, got {self.sector_centres_deg}"
-            )
-        if len(self.sector_widths_deg) != 3 or not all(
-            0.0 < w <= 180.0 for w in self.sector_widths_deg
-        ):
-            raise ValueError(
-                "sonar.sector_widths_deg must be 3 widths in (0, 180], "
-                f"got {self.sector_widths_deg}"
-            )
-        for name in ("rays_per_sector", "max_echoes"):
-            value = getattr(self, name)
-            if not isinstance(value, int) or isinstance(value, bool) or value < 1:
-                raise ValueError(f"sonar.{name} must be an int >= 1, got {value!r}")
-        if not (math.isfinite(self.range_noise_std_m) and self.range_noise_std_m >= 0):
-            raise ValueError(
-                f"sonar.range_noise_std_m must be finite and >= 0, got {self.range_noise_std_m}"
+                f"sonar.rays_per_sector must be an int >= 1, got {self.rays_per_sector!r}"
             )
         if not (0.0 <= self.dropout_probability < 1.0):
             raise ValueError(
                 f"sonar.dropout_probability must be in [0, 1), got {self.dropout_probability}"
             )
 
+    @property
+    def model(self) -> SonarModel:
+        """The sonar's geometry and noise, as perception interprets its echoes (the rays per
+        sector and the dropout are the simulation's own)."""
+        return SonarModel(
+            sector_centres_deg=self.sector_centres_deg,
+            sector_widths_deg=self.sector_widths_deg,
+            min_range_m=self.min_range_m,
+            max_range_m=self.max_range_m,
+            max_echoes=self.max_echoes,
+            echo_merge_m=self.echo_merge_m,
+            range_noise_std_m=self.range_noise_std_m,
+            mount_x_m=self.mount_x_m,
+            mount_height_m=self.mount_height_m,
+        )
+
 
 class Sonar:
-    """Ray-cast model of the Nao sonar, reporting echo distances per left/middle/right sector."""
+    """Ray-cast model of the Nao sonar, reporting echo distances per left/middle/right sector;
+    ``model`` is the geometry and noise it hears with."""
 
     def __init__(self, config: SonarConfig) -> None:
         self.config = config
+        self.model = config.model
         n = config.rays_per_sector
         offsets = np.linspace(-0.5, 0.5, n) if n > 1 else np.zeros(1)
-        centres = np.deg2rad(np.asarray(config.sector_centres_deg))[:, None]
-        widths = np.deg2rad(np.asarray(config.sector_widths_deg))[:, None]
+        centres = self.model.sector_centres_rad()[:, None]
+        widths = self.model.sector_widths_rad()[:, None]
         self._angles = (centres + widths * offsets).ravel()
 
     def ray_angles(self) -> FloatArray:
@@ -102,13 +102,13 @@ class Sonar:
         ``robot_pose`` is the robot's (3,) field pose ``(x, y, theta)``; rays run from the
         transducers out to ``max_range_m``.
         """
-        c = self.config
+        m = self.model
         return fan_rays(
             robot_pose,
-            mount_x_m=c.mount_x_m,
-            mount_height_m=c.mount_height_m,
+            mount_x_m=m.mount_x_m,
+            mount_height_m=m.mount_height_m,
             angles=self._angles,
-            length_m=c.max_range_m,
+            length_m=m.max_range_m,
         )
 
     def measure(
@@ -125,13 +125,13 @@ class Sonar:
         """
         starts, ends = self.rays(robot_pose)
         distances, bodies = cast(ray_caster, starts, ends, ignore_body)
-        c = self.config
-        n = c.rays_per_sector
-        out = np.full((3, c.max_echoes), np.nan)
-        for sector in range(3):
+        m = self.model
+        n = self.config.rays_per_sector
+        out = np.full((N_SONAR_SECTORS, m.max_echoes), np.nan)
+        for sector in range(N_SONAR_SECTORS):
             rows = slice(sector * n, (sector + 1) * n)
             true_echoes = merge_echoes(
-                surface_echoes(distances[rows], bodies[rows]), c.echo_merge_m
+                surface_echoes(distances[rows], bodies[rows]), m.echo_merge_m
             )
             echoes = self._noisy(true_echoes, rng)
             out[sector, : len(echoes)] = echoes
@@ -139,11 +139,11 @@ class Sonar:
 
     def _noisy(self, echoes: FloatArray, rng: np.random.Generator) -> FloatArray:
         """Add noise and dropouts to true echo distances; keep at most ``max_echoes`` in range."""
-        c = self.config
-        noisy = echoes + c.range_noise_std_m * rng.standard_normal(len(echoes))
-        kept = rng.random(len(echoes)) >= c.dropout_probability
-        kept &= (noisy >= c.min_range_m) & (noisy <= c.max_range_m)
-        return np.sort(noisy[kept])[: c.max_echoes]
+        m = self.model
+        noisy = echoes + m.range_noise_std_m * rng.standard_normal(len(echoes))
+        kept = rng.random(len(echoes)) >= self.config.dropout_probability
+        kept &= (noisy >= m.min_range_m) & (noisy <= m.max_range_m)
+        return np.sort(noisy[kept])[: m.max_echoes]
 
 
 def surface_echoes(distances: FloatArray, bodies: NDArray[np.int64]) -> FloatArray:

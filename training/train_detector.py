@@ -1,6 +1,6 @@
 """Train the CNN pole detector on frames from ``python -m spl_env.datasets``.
 
-``python -m perception.vision.train_detector --data data/poles --val data/poles_val --out
+``python -m training.train_detector --data data/poles --val data/poles_val --out
 perception/vision/weights/pole_detector.pt --epochs 24 --seed 0 --minutes 18``
 
 1. Loads every image into memory and turns its labels into targets: a pole whose band junction
@@ -640,7 +640,7 @@ def refit(path: Path, data_folder: Path) -> None:
     net = network_from_weights(old)
     images, records, meta = load_dataset(data_folder)
     data, fits = fit_measurement(path, net, images, records, meta)
-    command = " ".join(["python -m perception.vision.train_detector", *sys.argv[1:]])
+    command = " ".join(["python -m training.train_detector", *sys.argv[1:]])
     data["training"] = {**old.get("training", {}), "refit": {"command": command, **fits}}
     save(path, data)
     print(json.dumps({"range_model": data["range_model"], "refit": fits}, indent=1))
@@ -687,7 +687,7 @@ def main() -> None:
     net, log = train(config, images, samples, classes, validation)
     data, fits = fit_measurement(args.out, net, images, records, meta)
     data["training"] = {
-        "command": " ".join(["python -m perception.vision.train_detector", *sys.argv[1:]]),
+        "command": " ".join(["python -m training.train_detector", *sys.argv[1:]]),
         "config": dataclasses.asdict(config),
         "dataset": {k: meta[k] for k in ("images", "seed", "scenes")},
         "log": log,
