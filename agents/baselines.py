@@ -1,4 +1,6 @@
-"""Scripted head policies for ``SPL/ActiveVision-v0``, with SB3's ``predict`` signature.
+"""Scripted head policies for the SPL head-control envs, with SB3's ``predict`` signature.
+
+They read only the observation keys ``SPL/ActiveVision-v0`` and ``SPL/LookAround-v0`` share.
 
 - :class:`HeadScan`: sweeps the head yaw sinusoidally at level pitch (the classic SPL scan);
 - :class:`LookAtStalest`: points the head at the reachable mapped pole seen least recently,
@@ -6,7 +8,8 @@
 - :class:`FixedHead`: looks straight ahead (a lower bound).
 
 Policies are built from the env's :class:`spl_env.config.EnvConfig` (``from_config``) so that
-their actions follow the configured head limits and control rate.
+their actions follow the configured head limits and control rate; head angles become actions
+through :func:`spl_env.robots.nao.head_action`, clipped to [-1, 1].
 """
 
 from __future__ import annotations
@@ -18,19 +21,7 @@ from typing import Any
 import numpy as np
 
 from spl_env.config import EnvConfig
-from spl_env.sim.robot import RobotConfig
-
-
-def head_action(robot: RobotConfig, yaw_rad: float, pitch_rad: float) -> np.ndarray:
-    """The env action (2,) float32 whose head target is ``(yaw_rad, pitch_rad)``.
-
-    Targets beyond the joint limits map beyond [-1, 1] and are clipped there: the head then
-    looks as far as its joint goes.
-    """
-    yaw = yaw_rad / robot.head_yaw_limit_rad
-    span = robot.head_pitch_max_rad - robot.head_pitch_min_rad
-    pitch = 2.0 * (pitch_rad - robot.head_pitch_min_rad) / span - 1.0
-    return np.clip(np.array([yaw, pitch]), -1.0, 1.0).astype(np.float32)
+from spl_env.robots.nao import RobotConfig, head_action
 
 
 class ScriptedPolicy(ABC):
@@ -44,11 +35,19 @@ class ScriptedPolicy(ABC):
     @classmethod
     def from_config(cls, config: EnvConfig) -> ScriptedPolicy:
         """The policy for an env built from ``config``."""
-        return cls(config.sim.robot, config.sim.control_dt_s)
+        return cls(config.robot, config.control_dt_s)
 
     def reset(self) -> None:
         """Start of an episode."""
         self.t_s = 0.0
+
+    def look(self, yaw_rad: float, pitch_rad: float) -> np.ndarray:
+        """The action (2,) float32 whose head target is ``(yaw_rad, pitch_rad)``.
+
+        Targets beyond the joint limits map beyond [-1, 1] and are clipped there: the head then
+        looks as far as its joint goes.
+        """
+        return np.clip(head_action(self.robot, yaw_rad, pitch_rad), -1.0, 1.0).astype(np.float32)
 
     @abstractmethod
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
@@ -77,7 +76,7 @@ class HeadScan(ScriptedPolicy):
 
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         yaw = self.amplitude_rad * math.sin(2 * math.pi * self.t_s / self.period_s)
-        return head_action(self.robot, yaw, 0.0)
+        return self.look(yaw, 0.0)
 
 
 class LookAtStalest(HeadScan):
@@ -97,14 +96,14 @@ class LookAtStalest(HeadScan):
         if not reachable.any():
             return super().act(obs)
         target = int(np.argmax(np.where(reachable, obs["landmarks_since_seen"], -1.0)))
-        return head_action(self.robot, float(bearings[target]), 0.0)
+        return self.look(float(bearings[target]), 0.0)
 
 
 class FixedHead(ScriptedPolicy):
     """Always look straight ahead at level pitch."""
 
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
-        return head_action(self.robot, 0.0, 0.0)
+        return self.look(0.0, 0.0)
 
 
 BASELINES: dict[str, type[ScriptedPolicy]] = {

@@ -1,6 +1,7 @@
 """The demo episode: one minute of ``SPL/ActiveVision-v0`` with the scripted head scan.
 
     python -m agents.demo --out outputs/demo
+    python -m agents.demo --out outputs/demo_short --set episode_s=10 body_behaviour=square
 
 Writes ``frames.png`` (a strip of rendered views: top-down truth and belief beside the camera
 image with detections), ``trajectory.png`` and ``metrics.json`` to ``--out``.
@@ -50,7 +51,11 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--frames", type=int, default=6, help="views in the strip")
     parser.add_argument(
-        "--set", nargs="*", default=[], metavar="KEY=VALUE", help="env config overrides"
+        "--set",
+        nargs="*",
+        default=[],
+        metavar="KEY=VALUE",
+        help="env config overrides by dotted path, top-level name or alias, as agents.evaluate",
     )
     args = parser.parse_args(argv)
     if args.frames < 1:
@@ -71,7 +76,7 @@ def main(argv: list[str] | None = None) -> None:
     cv2.imwrite(str(args.out / "frames.png"), frame_strip(record.frames[: args.frames]))
     cv2.imwrite(
         str(args.out / "trajectory.png"),
-        trajectory_plot(env.get_wrapper_attr("config").sim.scene.dimensions, record),
+        trajectory_plot(env.get_wrapper_attr("config").scene.dimensions, record),
     )
     metrics = episode_metrics(record)
     (args.out / "metrics.json").write_text(json.dumps(metrics, indent=2))

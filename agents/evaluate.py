@@ -2,13 +2,20 @@
 
     python -m agents.evaluate --policy scan --episodes 3 --out outputs/eval_scan
     python -m agents.evaluate --policy runs/ppo/model.zip --episodes 3 --out outputs/eval_ppo
+    python -m agents.evaluate --env SPL/LookAround-v0 --policy look_at_stalest --set frontend=colour
 
 Writes ``metrics.json`` (per episode and mean: return, mean SLAM position error, mean
-odometry-only error, mean pose NEES, landmark error, ``null`` where no landmark was mapped) and
-``trajectory.png`` (the first episode: true path green, SLAM orange, odometry grey, on the field).
+odometry-only error, mean pose NEES, landmark error, ``null`` where no landmark was mapped, mean
+wall-clock milliseconds per step) and ``trajectory.png`` (the first episode: true path green,
+SLAM orange, odometry grey, on the field).
 
-A model ``.zip`` saved by ``agents.train`` has its ``config.json`` beside it: its ``env_kwargs``
-configure the env the model is evaluated on, and ``--set`` overrides them.
+``--set key=value`` overrides the env config: a key is a dotted path
+(``sensors.camera.noise_std``), a top-level name (``control_dt_s``) or an alias of the env
+(``episode_s``, ``frontend``, ``backend``, ``body_behaviour``, ...; see
+:data:`spl_env.envs.active_vision.ACTIVE_VISION_ALIASES`). A model ``.zip`` saved by
+``agents.train`` has its ``config.json`` beside it: its ``env_kwargs`` configure the env the
+model is evaluated on, and ``--set`` overrides them. The env must keep ``info_level="full"``:
+the metrics read perception and ground truth from ``info``.
 """
 
 from __future__ import annotations
@@ -41,7 +48,11 @@ class Policy(Protocol):
 
 @dataclass
 class EpisodeRecord:
-    """What one episode produced, step by step (T steps incl. the reset)."""
+    """What one episode produced, step by step (T steps incl. the reset).
+
+    ``step_seconds`` holds each step's wall-clock seconds (physics, rendering, sensors and
+    perception; 0 for the reset).
+    """
 
     episode_return: float = 0.0
     true_poses: list[np.ndarray] = field(default_factory=list)
@@ -52,17 +63,19 @@ class EpisodeRecord:
     frames: list[np.ndarray] = field(default_factory=list)
     final_info: dict[str, Any] = field(default_factory=dict)
 
-    def add(self, info: dict[str, Any]) -> None:
+    def add(self, info: dict[str, Any], step_s: float) -> None:
+        """Keep one step's ``info`` (``info_level="full"``) and its wall-clock seconds."""
         self.true_poses.append(info["ground_truth"]["robot_pose"])
         self.slam_poses.append(info["perception"]["pose"])
         self.odometry_poses.append(info["perception"]["odometry_pose"])
         self.pose_covs.append(info["perception"]["pose_cov"])
-        self.step_seconds.append(sum(info["timing"].values()))
+        self.step_seconds.append(step_s)
         self.final_info = info
 
 
 def load_policy(spec: str, config: EnvConfig) -> Policy:
-    """A baseline by name (for an env built from ``config``), or an SB3 PPO ``.zip``."""
+    """A baseline by name for an env built from ``config`` (the env's ``config_class``, e.g.
+    :class:`spl_env.envs.active_vision.ActiveVisionConfig`), or an SB3 PPO ``.zip``."""
     if spec in BASELINES:
         return BASELINES[spec].from_config(config)
     if spec.endswith(".zip") and Path(spec).exists():
@@ -75,16 +88,22 @@ def load_policy(spec: str, config: EnvConfig) -> Policy:
 
 
 def run_episode(env: gym.Env, policy: Policy, seed: int, frame_every: int = 0) -> EpisodeRecord:
-    """One episode; with ``frame_every > 0`` keeps ``env.render()`` every that many steps."""
+    """One episode of ``policy`` on the SPL env ``env``; with ``frame_every > 0`` keeps
+    ``env.render()`` every that many steps."""
     record = EpisodeRecord()
     obs, info = env.reset(seed=seed)
-    record.add(info)
+    if "perception" not in info or "ground_truth" not in info:
+        raise ValueError(
+            "evaluation reads info['perception'] and info['ground_truth']: make the env with "
+            "info_level='full' (the default)"
+        )
+    record.add(info, 0.0)
     done, step = False, 0
     while not done:
         action, _ = policy.predict(obs, episode_start=np.array([step == 0]), deterministic=True)
         obs, reward, terminated, truncated, info = env.step(action)
         record.episode_return += float(reward)
-        record.add(info)
+        record.add(info, sum(env.get_wrapper_attr("step_times").values()))
         step += 1
         if frame_every and step % frame_every == 0:
             record.frames.append(np.asarray(env.render()))
@@ -105,8 +124,9 @@ def episode_metrics(record: EpisodeRecord) -> dict[str, float | None]:
         pose_nees(t, e, c)
         for t, e, c in zip(record.true_poses, record.slam_poses, record.pose_covs, strict=True)
     ]
-    gt, per = record.final_info["ground_truth"], record.final_info["perception"]
-    lm = landmark_errors(gt["landmark_ids"], gt["landmarks"], per["landmark_ids"], per["landmarks"])
+    gt = record.final_info["ground_truth"]
+    ids, landmarks = mapped_landmarks(record.final_info["perception"])
+    lm = landmark_errors(gt["landmark_ids"], gt["landmarks"], ids, landmarks)
     return {
         "return": record.episode_return,
         "mean_position_error_m": float(np.mean(slam_err)),
@@ -121,14 +141,21 @@ def episode_metrics(record: EpisodeRecord) -> dict[str, float | None]:
     }
 
 
+def mapped_landmarks(perception: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    """Ids (K,) and estimates (K, 2) of the landmarks SLAM mapped, from ``info["perception"]``
+    (whose rows follow the env's landmark order, masked by ``landmarks_mapped``)."""
+    mapped = np.asarray(perception["landmarks_mapped"], dtype=bool)
+    ids = np.asarray(perception["landmark_ids"])[mapped]
+    return ids, np.asarray(perception["landmarks"], dtype=np.float64)[mapped]
+
+
 def trajectory_plot(dims: FieldDimensions, record: EpisodeRecord) -> np.ndarray:
     """(H, W, 3) BGR picture of the true, SLAM and odometry paths and the final map."""
     view = TopDownView(dims)
     img = view.background.copy()
-    gt, per = record.final_info["ground_truth"], record.final_info["perception"]
-    for xy in gt["landmarks"]:
+    for xy in record.final_info["ground_truth"]["landmarks"]:
         cv2.circle(img, view.px(xy), 6, TRUE_BGR, 2)
-    for xy in per["landmarks"]:
+    for xy in mapped_landmarks(record.final_info["perception"])[1]:
         cv2.drawMarker(img, view.px(xy), SLAM_BGR, cv2.MARKER_CROSS, 12, 2)
     for poses, colour in (
         (record.odometry_poses, ODOM_BGR),
@@ -191,7 +218,8 @@ def main(argv: list[str] | None = None) -> None:
         nargs="*",
         default=[],
         metavar="KEY=VALUE",
-        help="env config overrides, e.g. --set episode_s=30 body_behaviour=square",
+        help="env config overrides by dotted path, top-level name or alias, e.g. "
+        "--set episode_s=30 body_behaviour=square sensors.camera.noise_std=0",
     )
     args = parser.parse_args(argv)
     if args.episodes < 1:
@@ -207,7 +235,7 @@ def main(argv: list[str] | None = None) -> None:
         if k == 0:
             cv2.imwrite(
                 str(args.out / "trajectory.png"),
-                trajectory_plot(env.get_wrapper_attr("config").sim.scene.dimensions, record),
+                trajectory_plot(env.get_wrapper_attr("config").scene.dimensions, record),
             )
     env.close()
     result = {

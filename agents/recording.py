@@ -8,50 +8,66 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Mapping
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
 from agents.evaluate import Policy
-from perception.pipeline import FrontEnd, make_frontend
+from perception.pipeline import PerceptionPipeline
+from perception.providers.base import PerceptionContext
 from perception.replay import SightingLog
+from perception.representations import POLE_SIGHTINGS, Prior
 from perception.types import LandmarkObservation
-from spl_env.envs.active_vision import ActiveVisionEnv
+from spl_env.envs.core import SplEnv
 
 
-def frontends_for(env: gym.Env, names: tuple[str, ...]) -> dict[str, FrontEnd]:
-    """Front ends ``names`` (see :data:`perception.pipeline.FRONTENDS`) for ``env``'s camera,
-    configured as ``env``'s perception config configures them."""
+def frontends_for(env: gym.Env, names: tuple[str, ...]) -> dict[str, PerceptionPipeline]:
+    """One pipeline computing only pole sightings per front end of ``names`` (the providers of
+    :data:`perception.pipeline.PROVIDERS` ``[POLE_SIGHTINGS]``) for ``env``'s camera, configured
+    as ``env``'s perception config configures them.
+
+    Each reads ``env``'s sensor frames: the image-based front ends need the rendered camera
+    mode. The front end ``env`` itself runs takes what the env's frames emulate for it (the
+    geometric camera mode's sightings), so it sees exactly what the env's SLAM saw.
+    """
     core = _core(env)
     config = core.config
+    context = PerceptionContext(
+        config.sensors.camera.model, core.scene.codes, config.scene.poles.geometry
+    )
     return {
-        name: make_frontend(
-            dataclasses.replace(config.perception, frontend=name),
-            config.sim.camera.model,
-            core.codes,
-            config.sim.scene.poles.geometry,
+        name: PerceptionPipeline(
+            dataclasses.replace(config.perception, pole_sightings=name),
+            context,
+            outputs=[POLE_SIGHTINGS],
+            emulated=core.pipeline.emulated if name == config.perception.pole_sightings else (),
         )
         for name in names
     }
 
 
 def record_episode(
-    env: gym.Env, policy: Policy, seed: int, frontends: Mapping[str, FrontEnd]
+    env: gym.Env, policy: Policy, seed: int, frontends: Mapping[str, PerceptionPipeline]
 ) -> SightingLog:
-    """Run one episode of ``policy`` on ``env`` and record what each of ``frontends`` saw."""
+    """Run one episode of ``policy`` on ``env`` (``info_level="full"``) and record what each
+    of ``frontends`` (see :func:`frontends_for`) saw."""
     core = _core(env)
     obs, info = env.reset(seed=seed)
-    believed_start = core.perception.initial_pose.copy()
+    # dead reckoning's pose at reset: the filter's start belief (reset's odometry is zero)
+    believed_start = np.asarray(info["perception"]["odometry_pose"], dtype=np.float64).copy()
+    for pipeline in frontends.values():
+        pipeline.reset(Prior(pose=believed_start, rng=np.random.default_rng(seed)))
     times, deltas, poses = [], [], []
     seen: dict[str, list[tuple[LandmarkObservation, ...]]] = {name: [] for name in frontends}
 
-    def record(info: dict) -> None:
+    def record(info: dict[str, Any]) -> None:
         frame = core.sensor_frame
         times.append(frame.time_s)
         deltas.append(np.asarray(frame.odometry_delta, dtype=np.float64))
         poses.append(np.asarray(info["ground_truth"]["robot_pose"], dtype=np.float64))
-        for name, frontend in frontends.items():
-            seen[name].append(frontend.sightings(frame))
+        for name, pipeline in frontends.items():
+            seen[name].append(pipeline.step(frame)[POLE_SIGHTINGS])
 
     record(info)
     done, step = False, 0
@@ -72,8 +88,9 @@ def record_episode(
     )
 
 
-def _core(env: gym.Env) -> ActiveVisionEnv:
+def _core(env: gym.Env) -> SplEnv:
+    """The SPL env ``env`` wraps; TypeError for any other env."""
     core = env.unwrapped
-    if not isinstance(core, ActiveVisionEnv):
-        raise TypeError(f"env must wrap an ActiveVisionEnv, got {type(core).__name__}")
+    if not isinstance(core, SplEnv):
+        raise TypeError(f"env must wrap an SplEnv, got {type(core).__name__}")
     return core

@@ -2,10 +2,11 @@
 
     python -m agents.train --timesteps 20000 --out runs/ppo_active_vision
     python -m agents.train --timesteps 2048 --progress-bar --tensorboard runs/tb
+    python -m agents.train --timesteps 4096 --set camera_mode=geometric frontend=colour episode_s=20
 
 Hyper-parameters come from ``agents/configs/<env id with / as _>.json`` (plain values) and can be
-changed with ``--set`` (env config) or by editing a copy passed with ``--config``. Saves
-``model.zip`` and the resolved ``config.json`` to ``--out``.
+changed with ``--set`` (env config keys as in ``agents.evaluate``) or by editing a copy passed
+with ``--config``. Saves ``model.zip`` and the resolved ``config.json`` to ``--out``.
 """
 
 from __future__ import annotations
@@ -82,7 +83,11 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--progress-bar", action="store_true", help="needs the 'train' extra")
     parser.add_argument("--tensorboard", type=Path, default=None, help="log dir; needs tensorboard")
     parser.add_argument(
-        "--set", nargs="*", default=[], metavar="KEY=VALUE", help="env config overrides"
+        "--set",
+        nargs="*",
+        default=[],
+        metavar="KEY=VALUE",
+        help="env config overrides by dotted path, top-level name or alias, as agents.evaluate",
     )
     args = parser.parse_args(argv)
     config = load_config(args.config or default_config_path(args.env))

@@ -4,7 +4,8 @@
 
 Every policy runs the same seeds (one-minute episodes, default config), on the patrol walk and
 on seed 000's square walk. Reported per setting: the mean over episodes of each episode's mean
-SLAM position error, odometry-only error, pose NEES, landmark error and return.
+SLAM position error, odometry-only error, pose NEES, landmark error, return and wall-clock time
+per step (:func:`agents.evaluate.episode_metrics`).
 """
 
 from __future__ import annotations
@@ -26,13 +27,14 @@ def main() -> None:
     )
     parser.add_argument("--episodes", type=int, default=5)
     parser.add_argument("--seed", type=int, default=100)
+    parser.add_argument("--episode-s", type=float, default=60.0, help="episode length (s)")
     parser.add_argument(
         "--out", type=Path, default=Path("benchmarks/results/active_vision_baselines.json")
     )
     args = parser.parse_args()
     results = []
     for behaviour in ("patrol", "square"):
-        env = gym.make("SPL/ActiveVision-v0", body_behaviour=behaviour)
+        env = gym.make("SPL/ActiveVision-v0", body_behaviour=behaviour, episode_s=args.episode_s)
         for name in BASELINES:
             policy = load_policy(name, env.get_wrapper_attr("config"))
             episodes = [
@@ -50,7 +52,15 @@ def main() -> None:
         env.close()
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(
-        json.dumps({"episodes": args.episodes, "seed": args.seed, "results": results}, indent=2)
+        json.dumps(
+            {
+                "episodes": args.episodes,
+                "seed": args.seed,
+                "episode_s": args.episode_s,
+                "results": results,
+            },
+            indent=2,
+        )
     )
 
 

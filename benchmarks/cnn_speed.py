@@ -9,7 +9,7 @@ frame, after ``--warmup`` passes over them:
   front end costs per frame.
 
 Each frame is run ``--repeats`` times; the mean, median and 95th percentile are reported.
-Writes ``benchmarks/results/cnn_speed.json``.
+Writes ``--out`` (default ``benchmarks/results/cnn_speed.json``).
 
 Usage::
 
@@ -82,6 +82,7 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--warmup", type=int, default=1)
     parser.add_argument("--seed", type=int, default=7)
+    parser.add_argument("--out", type=Path, default=RESULTS / "cnn_speed.json")
     args = parser.parse_args()
     torch.set_num_threads(1)
     images, states, meta = frames(args.frames, args.seed)
@@ -117,8 +118,8 @@ def main() -> None:
             "ms_median": float(np.median(ms)),
             "ms_p95": float(np.percentile(ms, 95)),
         }
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    (RESULTS / "cnn_speed.json").write_text(json.dumps(report, indent=1) + "\n")
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(report, indent=1) + "\n")
     print(json.dumps(report, indent=1))
 
 

@@ -3,8 +3,10 @@
     python benchmarks/env_speed.py --steps 300 --out benchmarks/results/env_speed.json
 
 Runs ``SPL/ActiveVision-v0`` with random head actions (one process, one env) and times whole
-``env.step`` calls; the parts come from ``info["timing"]``, and "other" is the rest (observation,
-reward, info, Python overhead).
+``env.step`` calls; the parts come from ``info["timing"]`` (the env is made with
+``info_timing=True``), and "other" is the rest (observation, reward, info, Python overhead).
+Also the wall time of the first ``env.reset()`` (the first episode start, e.g. the CNN's first
+pass) and the mean of ``--resets`` later ones (what each new episode costs).
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import os
 import platform
 import time
 from pathlib import Path
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -24,13 +27,20 @@ import spl_env  # noqa: F401  (registers the env ids)
 PARTS = ("physics", "render", "sensors", "perception")
 
 
-def measure(env_id: str, steps: int, seed: int, overrides: dict[str, object]) -> dict[str, object]:
-    """Time ``steps`` env steps after one warm-up episode start."""
-    env = gym.make(env_id, **overrides)
-    env.action_space.seed(seed)
-    t_reset = time.perf_counter()
+def _timed_reset(env: gym.Env, seed: int) -> float:
+    """Seconds of one ``env.reset(seed=seed)``."""
+    t0 = time.perf_counter()
     env.reset(seed=seed)
-    reset_s = time.perf_counter() - t_reset
+    return time.perf_counter() - t0
+
+
+def measure(
+    env_id: str, steps: int, resets: int, seed: int, overrides: dict[str, Any]
+) -> dict[str, Any]:
+    """Time the first reset, ``steps`` env steps after it, then ``resets`` later resets."""
+    env = gym.make(env_id, info_timing=True, **overrides)
+    env.action_space.seed(seed)
+    first_reset_s = _timed_reset(env, seed)
     totals = dict.fromkeys(PARTS, 0.0)
     step_s = []
     for _ in range(steps):
@@ -41,6 +51,7 @@ def measure(env_id: str, steps: int, seed: int, overrides: dict[str, object]) ->
             totals[part] += info["timing"][part]
         if terminated or truncated:
             env.reset()
+    later_reset_s = [_timed_reset(env, seed + 1 + k) for k in range(resets)]
     env.close()
     total = float(np.sum(step_s))
     shares = {part: totals[part] / total for part in PARTS}
@@ -52,7 +63,11 @@ def measure(env_id: str, steps: int, seed: int, overrides: dict[str, object]) ->
         "steps_per_second": steps / total,
         "mean_step_ms": 1000 * total / steps,
         "p95_step_ms": 1000 * float(np.percentile(step_s, 95)),
-        "reset_ms": 1000 * reset_s,
+        "reset_ms": {
+            "first": 1000 * first_reset_s,
+            "later_mean": 1000 * float(np.mean(later_reset_s)) if later_reset_s else None,
+            "later_resets": resets,
+        },
         "share": shares,
         "mean_ms": {part: 1000 * totals[part] / steps for part in PARTS},
     }
@@ -64,16 +79,16 @@ def main() -> None:
     )
     parser.add_argument("--env", default="SPL/ActiveVision-v0")
     parser.add_argument("--steps", type=int, default=300)
+    parser.add_argument("--resets", type=int, default=5, help="later resets timed")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path, default=Path("benchmarks/results/env_speed.json"))
     args = parser.parse_args()
-    runs = [
-        measure(args.env, args.steps, args.seed, {}),
-        measure(args.env, args.steps, args.seed, {"randomise_lighting": True}),
-        measure(
-            args.env, args.steps, args.seed, {"camera_mode": "geometric", "frontend": "colour"}
-        ),
-    ]
+    settings: tuple[dict[str, Any], ...] = (
+        {},
+        {"randomise_lighting": True},
+        {"camera_mode": "geometric", "frontend": "colour"},
+    )
+    runs = [measure(args.env, args.steps, args.resets, args.seed, o) for o in settings]
     result = {
         "machine": {"cpu_count": os.cpu_count(), "python": platform.python_version()},
         "runs": runs,

@@ -32,9 +32,11 @@ import spl_env  # noqa: F401  (registers the env ids)
 from agents.baselines import FixedHead, HeadScan
 from perception.geometry import wrap_angle
 from perception.metrics import landmark_range_bearing
-from perception.pipeline import ColourFrontEnd
+from perception.providers.poles import ColourPoleSightings
+from perception.representations import POLE_SIGHTINGS
+from spl_env.envs.core import SplEnv
 from spl_env.sensors.camera import blur_length_px
-from spl_env.sensors.geometric_camera import smear
+from spl_env.sensors.emulation.poles import GeometricPoleCamera, smear
 
 SMEAR_BOUNDS = (0.25, 0.5, 1.0, 2.0, 4.0, 1000.0)
 SIGMA_GRID_PX = np.round(np.arange(0.0, 2.01, 0.05), 2)
@@ -50,17 +52,44 @@ def _policies(env: gym.Env, rng: np.random.Generator) -> dict[str, Any]:
     }
 
 
+def _geometric_camera(core: SplEnv) -> GeometricPoleCamera:
+    """The geometric camera mode's pole camera for ``core``'s scene (as the env builds it)."""
+    cfg, scene = core.config, core.scene
+    return GeometricPoleCamera(
+        cfg.sensors.geometric_camera,
+        cfg.sensors.camera.model,
+        cfg.scene.poles.geometry,
+        scene.landmarks,
+        tuple(int(i) for i in scene.landmark_ids),
+        scene.pole_body_ids(),
+    )
+
+
+def _camera_yaw(info: dict[str, Any]) -> float:
+    """Our camera's heading in the field (rad): body heading plus head yaw, from ``info``."""
+    gt = info["ground_truth"]
+    return float(gt["robot_pose"][2] + gt["head"][0])
+
+
 def collect(episodes: int, seconds: float, seed: int) -> dict[str, list]:
     """Per visible pole: smear, detection, rendered errors, and what the geometric model needs."""
     env = gym.make("SPL/ActiveVision-v0", episode_s=seconds, frontend="colour")
     core = env.unwrapped
-    camera = core.config.sim.camera
+    if not isinstance(core, SplEnv):
+        raise TypeError(f"the fit needs an SplEnv, got {type(core).__name__}")
+    sightings = core.pipeline.provider(POLE_SIGHTINGS)
+    if not isinstance(sightings, ColourPoleSightings):
+        raise TypeError(f"the fit needs the colour front end, got {type(sightings).__name__}")
+    camera = core.config.sensors.camera
+    geometric = _geometric_camera(core)
+    ours = core.robots[0]
     rows: dict[str, list] = {"smear": [], "detected": [], "err": [], "geometry": [], "policy": []}
     for name, predict in _policies(env, np.random.default_rng(seed)).items():
         for k in range(episodes):
             obs, info = env.reset(seed=seed + k)
             done, step = False, 0
             while not done:
+                yaw_before = _camera_yaw(info)
                 action, _ = predict(obs, episode_start=np.array([step == 0]))
                 obs, _, terminated, truncated, info = env.step(action)
                 done, step = terminated or truncated, step + 1
@@ -68,31 +97,36 @@ def collect(episodes: int, seconds: float, seed: int) -> dict[str, list]:
                 truth = landmark_range_bearing(
                     gt["robot_pose"], gt["landmark_ids"], gt["landmarks"]
                 )
-                position, rotation = core.sim.robot.camera_pose_world()
-                visible = core.sim.geometric_camera.visible(core.sim.world, position, rotation)
-                blur = blur_length_px(
-                    core.sim.last_yaw_rate_rps, camera.exposure_time_s, camera.model.fx
-                )
-                detected = {d[0]: d for d in info["perception"]["detections"]}
+                position, rotation = ours.camera_pose_world()
+                visible = geometric.visible(core.world, position, rotation)
+                # the camera's turn rate this step, as the env computes it for motion blur
+                yaw_rate = float(wrap_angle(_camera_yaw(info) - yaw_before))
+                yaw_rate /= core.config.control_dt_s
+                blur = blur_length_px(yaw_rate, camera.exposure_time_s, camera.model.fx)
+                seen = info["perception"]
+                detected = {
+                    int(i): (float(rb[0]), float(rb[1]))
+                    for i, rb, ok in zip(
+                        seen["landmark_ids"], seen["sightings"], seen["sighted"], strict=True
+                    )
+                    if ok
+                }
                 for band, s in zip(visible, smear(visible, blur), strict=True):
                     true_range, true_bearing = truth[band.landmark_id]
                     hit = detected.get(band.landmark_id)
-                    ok = hit is not None and abs(hit[1] - true_range) <= MATCH_FRACTION * true_range
+                    ok = hit is not None and abs(hit[0] - true_range) <= MATCH_FRACTION * true_range
                     rows["smear"].append(float(s))
                     rows["detected"].append(ok)
                     rows["policy"].append(name)
                     rows["err"].append(
-                        (hit[1] - true_range, float(wrap_angle(hit[2] - true_bearing)))
+                        (hit[0] - true_range, float(wrap_angle(hit[1] - true_bearing)))
                         if ok and hit is not None
                         else (np.nan, np.nan)
                     )
                     rows["geometry"].append(
                         (band, core.sensor_frame.camera_state, true_range, true_bearing)
                     )
-    frontend = core.perception.frontend
-    if not isinstance(frontend, ColourFrontEnd):
-        raise TypeError(f"the fit needs the colour front end, got {type(frontend).__name__}")
-    rows["detector"] = [frontend.detector]
+    rows["detector"] = [sightings.detector]
     env.close()
     return rows
 

@@ -1,7 +1,7 @@
 """Range from the pole's band edges against range from the CNN box extents, on held-out frames.
 
-For every labelled pole the shipped CNN detects (``perception.vision.train_detector``'s
-matching: a detection of its class near its band junction), the range from the box extents
+For every labelled pole the shipped CNN detects (``training.train_detector``'s matching: a
+detection of its class near its band junction), the range from the box extents
 (:class:`perception.vision.cnn_detector.PoleRangeModel`) and, where the three band edges are
 found, from the edges (:mod:`perception.vision.pole_edges`), all against the label's true
 range. Per true-range bucket: how often the edges are found, the mean and median absolute
@@ -18,7 +18,7 @@ Usage (the dataset from ``python -m spl_env.datasets --out data/poles_val --imag
 
     python benchmarks/pole_edges.py --data data/poles_val
 
-Writes ``benchmarks/results/pole_edges.json``.
+Writes ``--out`` (default ``benchmarks/results/pole_edges.json``).
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ from perception.types import CameraModel, PoleCode, PoleGeometry
 from perception.vision import CnnDetectorConfig, CnnPoleDetector
 from perception.vision.cnn_detector import vertical_lean
 from perception.vision.pole_edges import PoleEdgeConfig, pole_edge_distance
-from perception.vision.train_detector import load_dataset, match_sightings
+from training.train_detector import load_dataset, match_sightings
 
 RESULTS = Path("benchmarks/results")
 BUCKETS_M = ((0.0, 1.5), (1.5, 3.0), (3.0, 5.0), (5.0, 10.0))
@@ -149,11 +149,12 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--data", type=Path, default=Path("data/poles_val"))
+    parser.add_argument("--out", type=Path, default=RESULTS / "pole_edges.json")
     args = parser.parse_args()
     torch.set_num_threads(1)
     summary = {"dataset": str(args.data), **summarise(measure(args.data))}
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    (RESULTS / "pole_edges.json").write_text(json.dumps(summary, indent=1) + "\n")
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(summary, indent=1) + "\n")
     print(json.dumps(summary, indent=1))
 
 

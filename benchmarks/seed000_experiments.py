@@ -42,6 +42,7 @@ from perception.slam import EkfSlamConfig
 from perception.synthetic import CircleWorld, circle_run
 from perception.vision.cnn_detector import CnnDetectorConfig
 from spl_env.config import EnvConfig
+from spl_env.envs.core import SplEnv
 from spl_env.rendering import TopDownView
 
 OUT = Path("benchmarks/results/seed000")
@@ -276,7 +277,7 @@ def back_end_experiment(
     print(f"{name}: recording {episodes} x {episode_s:.0f} s ({behaviour})", flush=True)
     logs, config = record(behaviour, episode_s, episodes, seed, frontends)
     rows, results = compare_back_ends(logs, frontends, config.perception.slam)
-    dims = config.sim.scene.dimensions
+    dims = config.scene.dimensions
     for frontend in frontends:
         shown = {v: results[(frontend, v)][0] for v in ("classic", "FEJ", _best(rows, frontend))}
         cv2.imwrite(str(out / f"{name}_{frontend}_map.png"), map_plot(dims, logs[0], shown))
@@ -323,9 +324,11 @@ def consistency(runs: int, seed: int, out: Path) -> dict[str, Any]:
     }
     report: dict[str, Any] = {"runs": runs, "band_95": band}
     # (a) synthetic: the filter's own noise model, the SPL poles as landmarks
-    env = gym.make("SPL/ActiveVision-v0")
+    env = gym.make("SPL/ActiveVision-v0", camera_mode="geometric", frontend="colour")
     core = env.unwrapped
-    ids, landmarks = core.sim.landmark_ids, core.sim.landmarks  # type: ignore[attr-defined]
+    if not isinstance(core, SplEnv):
+        raise TypeError(f"consistency needs an SplEnv, got {type(core).__name__}")
+    ids, landmarks = core.scene.landmark_ids.copy(), core.scene.landmarks.copy()
     env.close()
     world = CircleWorld()
     print(f"consistency: {runs} synthetic runs of {world.steps} steps", flush=True)
@@ -424,6 +427,9 @@ def main() -> None:
     )
     parser.add_argument("--table41-episodes", type=int, default=3)
     parser.add_argument("--table41-minutes", type=float, default=10.0)
+    parser.add_argument("--table42-episodes", type=int, default=3)
+    parser.add_argument("--table42-steps", type=int, default=600, help="per episode")
+    parser.add_argument("--table42-images", type=int, default=150)
     parser.add_argument("--table43-episodes", type=int, default=10)
     parser.add_argument("--nees-runs", type=int, default=50)
     parser.add_argument("--frontends", nargs="+", default=list(FRONTENDS), choices=FRONTENDS)
@@ -458,7 +464,11 @@ def main() -> None:
         import front_ends  # benchmarks/front_ends.py, beside this script
 
         summary, records = front_ends.run_walking(
-            args.seed + 2000, episodes=3, steps=600, images=150, cnn_config=CnnDetectorConfig()
+            args.seed + 2000,
+            episodes=args.table42_episodes,
+            steps=args.table42_steps,
+            images=args.table42_images,
+            cnn_config=CnnDetectorConfig(),
         )
         (args.out / "table42_predictions.json").write_text(json.dumps(records) + "\n")
         results["table42"] = {"summary": summary, "markdown": front_ends.markdown(summary)}

@@ -42,6 +42,9 @@ def _maker(env_id: str, overrides: dict[str, Any]) -> Any:
     return lambda: gym.make(env_id, **overrides)
 
 
+WARMUP_STEPS = 20  # vector steps before the timing starts
+
+
 def vector_steps_per_second(
     env_id: str, kind: str, n_envs: int, steps: int, overrides: dict[str, Any]
 ) -> float:
@@ -52,14 +55,14 @@ def vector_steps_per_second(
     vec.reset()
     rng = np.random.default_rng(0)
     actions = rng.uniform(-1.0, 1.0, size=(steps, n_envs, *vec.action_space.shape))
-    for a in actions[:20]:  # warm up
+    for a in actions[:WARMUP_STEPS]:
         vec.step(a.astype(np.float32))
     t0 = time.perf_counter()
-    for a in actions[20:]:
+    for a in actions[WARMUP_STEPS:]:
         vec.step(a.astype(np.float32))
     elapsed = time.perf_counter() - t0
     vec.close()
-    return n_envs * (steps - 20) / elapsed
+    return n_envs * (steps - WARMUP_STEPS) / elapsed
 
 
 def _value(text: str) -> Any:
@@ -74,11 +77,15 @@ def main() -> None:
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument("--env", default="SPL/ActiveVision-v0")
-    parser.add_argument("--steps", type=int, default=1000)
+    parser.add_argument("--steps", type=int, default=1000, help="vector steps, warm-up included")
     parser.add_argument("--resets", type=int, default=5)
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     parser.add_argument("--out", type=Path, default=Path("benchmarks/results/vector_speed.json"))
     args = parser.parse_args()
+    if args.steps <= WARMUP_STEPS:
+        parser.error(f"--steps must exceed the {WARMUP_STEPS} warm-up steps, got {args.steps}")
+    if args.resets < 1:
+        parser.error(f"--resets must be >= 1, got {args.resets}")
     extra = {k: _value(v) for k, v in (item.split("=", 1) for item in args.set)}
     geometric = {"camera_mode": "geometric", "frontend": "colour", **extra}
     runs = {

@@ -1,41 +1,77 @@
-"""The perception stack wired together, called once per control step.
+"""The perception stack of one robot: the configured providers, run in dependency order.
 
-``SensorFrame`` -> front end (colour filter or CNN pole sightings) -> EKF SLAM back end
-(odometry prediction, landmark updates) -> :class:`perception.types.PerceptionOutput`. Dead
-reckoning from the same odometry runs beside it as the baseline SLAM must beat.
+A :class:`PerceptionPipeline` is asked for the representations a consumer reads (an env's
+observation, reward and info) and builds just the providers those need, transitively: an
+unused provider costs nothing. Each step feeds the :class:`perception.types.SensorFrame`'s
+inputs through the providers once and returns a
+:class:`perception.representations.PerceptionOutput`. The pipeline is built once (the CNN is
+loaded then) and :meth:`~PerceptionPipeline.reset` per episode.
 
-The front end is chosen by :attr:`PipelineConfig.frontend`, the back end by the ``backend``,
-``min_views`` and ``gate`` fields of :class:`perception.slam.EkfSlamConfig`.
+Provider choice, by representation (:data:`PROVIDERS`; the defaults of
+:class:`PipelineConfig` in brackets)::
+
+    image  ──► image_detections [cnn] ──► pole_sightings [cnn | colour | oracle]
+                                              │
+    odometry_delta ───────────────────────────┼──► self_pose [ekf_slam | oracle]
+                  └──► odometry_pose            └──► pole_last_seen [history]
+
+A representation an emulator delivers (``emulated``: the geometric camera mode's pole
+sightings) is read from :attr:`perception.types.SensorFrame.emulated` instead of a provider.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import Any
 
-import numpy as np
-from numpy.typing import ArrayLike
-
-from perception.geometry import compose
-from perception.slam import EkfSlam, EkfSlamConfig
-from perception.types import (
-    CameraModel,
-    LandmarkObservation,
-    PerceptionOutput,
-    PoleCode,
-    PoleGeometry,
-    SensorFrame,
+from perception.providers.base import PerceptionContext, Provider
+from perception.providers.odometry import DeadReckoning
+from perception.providers.oracles import OracleConfig, OraclePoleSightings, OracleSelfPose
+from perception.providers.poles import (
+    CnnDetections,
+    CnnPoleSightings,
+    ColourPoleSightings,
+    PoleSightingHistory,
 )
+from perception.providers.slam import EkfSlamProvider
+from perception.representations import (
+    FRAME_INPUTS,
+    IMAGE_DETECTIONS,
+    ODOMETRY_POSE,
+    POLE_LAST_SEEN,
+    POLE_SIGHTINGS,
+    SELF_POSE,
+    PerceptionOutput,
+    Prior,
+)
+from perception.slam import EkfSlamConfig
+from perception.types import SensorFrame
 from perception.vision.cnn_detector import CnnDetectorConfig
-from perception.vision.colour_filter import ColourFilterConfig, ColourPoleDetector
+from perception.vision.colour_filter import ColourFilterConfig
 
-FRONTENDS = ("colour", "cnn")
+ProviderFactory = Callable[["PipelineConfig", PerceptionContext], Provider]
+
+# representation -> provider name -> how to build it
+PROVIDERS: Mapping[str, Mapping[str, ProviderFactory]] = {
+    ODOMETRY_POSE: {"dead_reckoning": lambda c, ctx: DeadReckoning()},
+    IMAGE_DETECTIONS: {"cnn": lambda c, ctx: CnnDetections(c.cnn, ctx)},
+    POLE_SIGHTINGS: {
+        "cnn": lambda c, ctx: CnnPoleSightings(c.cnn, ctx),
+        "colour": lambda c, ctx: ColourPoleSightings(c.colour_filter, ctx),
+        "oracle": lambda c, ctx: OraclePoleSightings(c.oracle, ctx),
+    },
+    POLE_LAST_SEEN: {"history": lambda c, ctx: PoleSightingHistory()},
+    SELF_POSE: {
+        "ekf_slam": lambda c, ctx: EkfSlamProvider(c.slam),
+        "oracle": lambda c, ctx: OracleSelfPose(c.oracle),
+    },
+}
 
 
 @dataclass(frozen=True, kw_only=True)
 class PipelineConfig:
-    """Which front end runs, the configuration of each, and the back end's."""
+    """Which provider computes each representation, and each provider's configuration."""
 
     # The CNN with the gated back end: the best measured combination that never diverged
     # (README, "Choosing the defaults"). On the tuning walks (seeds 1300-1304) it maps as well
@@ -43,8 +79,9 @@ class PipelineConfig:
     # 0.062 / 0.107; the colour filter's best 0.085 / 0.155), and on one-minute patrols under
     # default lighting (seeds 100-104) the classic and FEJ filters were thrown 4.4 / 3.7 m off
     # by one confused sighting that the gate refused. The geometric camera mode emulates the
-    # colour filter and needs frontend="colour".
-    frontend: str = "cnn"  # one of FRONTENDS
+    # colour filter and needs pole_sightings="colour".
+    pole_sightings: str = "cnn"  # one of PROVIDERS["pole_sightings"]
+    self_pose: str = "ekf_slam"  # one of PROVIDERS["self_pose"]
     colour_filter: ColourFilterConfig = field(default_factory=ColourFilterConfig)
     # SLAM takes CNN detections scoring 0.6 or more whose two band colours are both seen,
     # stricter than the detector's defaults (0.4, its precision/recall balance): on the tuning
@@ -57,127 +94,100 @@ class PipelineConfig:
     # The seed's 0.4 m / pi/3 gate. It can lock a badly started landmark out of every
     # correction (seed 000 §4.1); EkfSlamConfig() alone is seed 000's classic Algorithm 5.
     slam: EkfSlamConfig = field(default_factory=lambda: EkfSlamConfig(backend="gated"))
+    oracle: OracleConfig = field(default_factory=OracleConfig)
 
     def __post_init__(self) -> None:
-        if self.frontend not in FRONTENDS:
-            raise ValueError(
-                f"PipelineConfig.frontend must be one of {FRONTENDS}, got {self.frontend!r}"
-            )
+        for representation in (POLE_SIGHTINGS, SELF_POSE):
+            name = getattr(self, representation)
+            if name not in PROVIDERS[representation]:
+                raise ValueError(
+                    f"PipelineConfig.{representation} must be one of "
+                    f"{tuple(PROVIDERS[representation])}, got {name!r}"
+                )
 
-
-class FrontEnd(Protocol):
-    """Turns one sensor frame into landmark sightings (robot frame)."""
-
-    def sightings(self, frame: SensorFrame) -> tuple[LandmarkObservation, ...]:
-        """The frame's pole sightings, at most one per landmark id."""
-        ...
-
-
-class ColourFrontEnd:
-    """Seed 000 §3.3 colour filter on the image, or its measurement model on the band centres
-    of the geometric camera mode."""
-
-    def __init__(
-        self,
-        config: ColourFilterConfig,
-        camera: CameraModel,
-        codes: Sequence[PoleCode],
-        pole: PoleGeometry,
-    ) -> None:
-        self.detector = ColourPoleDetector(config, camera, codes, pole)
-
-    def sightings(self, frame: SensorFrame) -> tuple[LandmarkObservation, ...]:
-        if (frame.image is None) == (frame.band_centres is None):
-            raise ValueError(
-                "frame must carry exactly one of image and band_centres, got "
-                f"image={'set' if frame.image is not None else None}, "
-                f"band_centres={'set' if frame.band_centres is not None else None}"
-            )
-        if frame.image is not None:
-            return tuple(self.detector.detect(frame.image, frame.camera_state))
-        found = (
-            self.detector.observe_band_centres(
-                b.landmark_id, b.upper, b.lower, b.box, frame.camera_state
-            )
-            for b in frame.band_centres or ()
-        )
-        return tuple(obs for obs in found if obs is not None)
-
-
-class CnnFrontEnd:
-    """Seed 000 §3.4 learned detector on the image (rendered camera mode only)."""
-
-    def __init__(
-        self,
-        config: CnnDetectorConfig,
-        camera: CameraModel,
-        codes: Sequence[PoleCode],
-        pole: PoleGeometry,
-    ) -> None:
-        from perception.vision.cnn_detector import CnnPoleDetector  # loads torch
-
-        self.detector = CnnPoleDetector(config, camera, codes, pole)
-
-    def sightings(self, frame: SensorFrame) -> tuple[LandmarkObservation, ...]:
-        if frame.image is None:
-            raise ValueError(
-                "the cnn front end needs a rendered image; frame.image is None "
-                "(the geometric camera mode delivers band centres for the colour front end only)"
-            )
-        return tuple(self.detector.detect(frame.image, frame.camera_state))
-
-
-def make_frontend(
-    config: PipelineConfig,
-    camera: CameraModel,
-    codes: Sequence[PoleCode],
-    pole: PoleGeometry,
-) -> FrontEnd:
-    """The front end ``config.frontend`` names."""
-    if config.frontend == "cnn":
-        return CnnFrontEnd(config.cnn, camera, codes, pole)
-    return ColourFrontEnd(config.colour_filter, camera, codes, pole)
+    def provider_name(self, representation: str) -> str:
+        """The provider configured for ``representation`` (the only one where there is one)."""
+        if representation in (POLE_SIGHTINGS, SELF_POSE):
+            return str(getattr(self, representation))
+        return next(iter(PROVIDERS[representation]))
 
 
 class PerceptionPipeline:
-    """The configured front end and EKF SLAM back end for one robot."""
+    """The providers that compute ``outputs`` (representation names) from sensor frames.
+
+    ``emulated`` names representations a frame delivers ready-made (in
+    :attr:`perception.types.SensorFrame.emulated`). Raises ValueError for an unknown
+    representation or a dependency cycle.
+    """
 
     def __init__(
         self,
         config: PipelineConfig,
-        camera: CameraModel,
-        codes: Sequence[PoleCode],
-        pole: PoleGeometry,
-        initial_pose: ArrayLike,
+        context: PerceptionContext,
+        outputs: Collection[str],
+        emulated: Collection[str] = (),
     ) -> None:
         self.config = config
-        self.frontend = make_frontend(config, camera, codes, pole)
-        self.slam = EkfSlam(config.slam, initial_pose)
-        self.initial_pose = np.asarray(initial_pose, dtype=np.float64).copy()  # (3,) start belief
-        self.odometry_pose = self.initial_pose.copy()
-        self.last_seen_s: dict[int, float] = {}
+        self.emulated = frozenset(emulated)
+        self._providers: dict[str, Provider] = {}  # in dependency order
+        inputs: set[str] = set()
+        visiting: list[str] = []
+
+        def resolve(name: str) -> None:
+            if name in self._providers or name in self.emulated or name in inputs:
+                return
+            if name in FRAME_INPUTS:
+                inputs.add(name)
+                return
+            if name not in PROVIDERS:
+                raise ValueError(
+                    f"unknown representation {name!r}; known: {sorted(PROVIDERS)} and the "
+                    f"sensor inputs {FRAME_INPUTS}"
+                )
+            if name in visiting:
+                raise ValueError(f"provider dependency cycle: {[*visiting, name]}")
+            visiting.append(name)
+            provider = PROVIDERS[name][config.provider_name(name)](config, context)
+            for required in provider.requires:
+                resolve(required)
+            visiting.pop()
+            self._providers[name] = provider
+
+        for name in outputs:
+            resolve(name)
+        self.frame_inputs = frozenset(inputs)  # the SensorFrame fields the providers read
+
+    @property
+    def representations(self) -> tuple[str, ...]:
+        """Names of the representations each step computes, in the order they run."""
+        return tuple(self._providers)
+
+    def provider(self, representation: str) -> Provider:
+        """The provider computing ``representation``; KeyError if none in this pipeline."""
+        return self._providers[representation]
+
+    def reset(self, prior: Prior) -> None:
+        """Start an episode: every provider forgets the last one."""
+        for provider in self._providers.values():
+            provider.reset(prior)
 
     def step(self, frame: SensorFrame) -> PerceptionOutput:
-        """Predict with the frame's odometry, detect poles in it, update the map."""
-        return self.fuse(frame.time_s, frame.odometry_delta, self.frontend.sightings(frame))
-
-    def fuse(
-        self,
-        time_s: float,
-        odometry_delta: ArrayLike,
-        observations: Sequence[LandmarkObservation],
-    ) -> PerceptionOutput:
-        """The back-end half of :meth:`step`: odometry increment (3,) (m, m, rad, frame of the
-        previous pose), then the sightings; used directly to replay recorded sightings."""
-        self.odometry_pose = compose(self.odometry_pose, odometry_delta)
-        self.slam.predict(odometry_delta)
-        self.slam.update(observations)
-        for obs in observations:
-            self.last_seen_s[obs.landmark_id] = time_s
-        return PerceptionOutput(
-            time_s=time_s,
-            slam=self.slam.estimate(),
-            odometry_pose=self.odometry_pose.copy(),
-            observations=tuple(observations),
-            last_seen_s=dict(self.last_seen_s),
-        )
+        """Run every provider once on ``frame``; ValueError if it lacks an input they read."""
+        values: dict[str, Any] = {}
+        for name in self.frame_inputs:
+            value = getattr(frame, name)
+            if value is None:
+                readers = [r for r, p in self._providers.items() if name in p.requires]
+                raise ValueError(f"frame.{name} is None, but the providers of {readers} read it")
+            values[name] = value
+        for name in self.emulated:
+            if name not in frame.emulated:
+                raise ValueError(f"frame.emulated lacks {name!r}, which this pipeline emulates")
+            values[name] = frame.emulated[name]
+        computed: dict[str, Any] = {}
+        for name, provider in self._providers.items():
+            needed = {r: values[r] for r in provider.requires}
+            values[name] = computed[name] = provider.update(needed, frame.time_s)
+        for name in self.emulated:
+            computed[name] = values[name]
+        return PerceptionOutput(time_s=frame.time_s, representations=computed)

@@ -7,13 +7,15 @@ defined in :mod:`perception.geometry`.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from perception.geometry import FloatArray, camera_rotation
+from perception.sensor_models import LaserModel, SonarModel
 
 POLE_COLOURS: tuple[str, ...] = ("pink", "yellow", "blue", "green")
 
@@ -161,40 +163,48 @@ class LandmarkObservation:
 
 
 @dataclass(frozen=True, kw_only=True)
-class BandCentres:
-    """Where a pole's two colour bands appear in the image: what the geometric camera mode
-    delivers in place of pixels.
+class GroundTruth:
+    """The true world, for oracle providers only (field frame, SI units).
 
-    ``upper`` and ``lower`` are (2,) ``(u, v)`` band centres (px); ``box`` is (4,)
-    ``(u0, v0, u1, v1)``.
+    An env fills :attr:`SensorFrame.truth` only when a configured provider requires it, so
+    that no other provider can read it. ``robot_pose`` (3,) is the sensing robot's pose;
+    ``landmark_ids`` (L,) int and ``landmarks`` (L, 2) the mapped poles' ids and positions.
     """
 
-    landmark_id: int
-    upper: FloatArray
-    lower: FloatArray
-    box: FloatArray
+    robot_pose: FloatArray
+    landmark_ids: NDArray[np.int64]
+    landmarks: FloatArray
 
 
 @dataclass(frozen=True, kw_only=True)
 class SensorFrame:
-    """What the robot's sensors deliver in one control step.
+    """What one robot's sensors deliver in one control step; every sensor is optional.
 
-    - ``odometry_delta`` (3,): motion since the last frame in the previous odometry pose's frame;
-    - ``image``: (H, W, 3) uint8 RGB, or ``None`` in the geometric camera mode;
-    - ``band_centres``: the poles' band centres in the geometric camera mode, else ``None``;
+    - ``odometry_delta`` (3,): motion since the last frame in the previous odometry pose's frame
+      (m, m, rad), or ``None``;
+    - ``camera`` and ``camera_state``: the camera's intrinsics and its pose on the robot as the
+      joints report it, or ``None`` for a robot without a camera;
+    - ``image``: (H, W, 3) uint8 RGB, or ``None`` when nothing was rendered;
     - ``sonar``: (3, E) echo distances (m) of the left/middle/right sectors, NaN-padded, or
-      ``None``;
-    - ``laser``: (B,) ranges (m) with NaN for no return, or ``None``.
+      ``None``; ``sonar_model`` its sector geometry and noise;
+    - ``laser``: (B,) ranges (m) with NaN for no return, or ``None``; ``laser_model`` its beam
+      angles (:meth:`perception.sensor_models.LaserModel.beam_angles`) and noise;
+    - ``emulated``: representations that a fast emulator produced in place of their providers
+      (the geometric camera mode: ``{"pole_sightings": ...}``), keyed by representation name;
+    - ``truth``: the ground truth, only when an oracle provider needs it, else ``None``.
     """
 
     time_s: float
-    odometry_delta: FloatArray
-    camera: CameraModel
-    camera_state: CameraState
+    odometry_delta: FloatArray | None = None
+    camera: CameraModel | None = None
+    camera_state: CameraState | None = None
     image: NDArray[np.uint8] | None = None
-    band_centres: tuple[BandCentres, ...] | None = None
     sonar: FloatArray | None = None
+    sonar_model: SonarModel | None = None
     laser: FloatArray | None = None
+    laser_model: LaserModel | None = None
+    emulated: Mapping[str, Any] = field(default_factory=dict)
+    truth: GroundTruth | None = None
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -210,19 +220,3 @@ class SlamEstimate:
     landmark_ids: NDArray[np.int64]
     landmarks: FloatArray
     landmark_covs: FloatArray
-
-
-@dataclass(frozen=True, kw_only=True)
-class PerceptionOutput:
-    """Everything the perception stack believes after one step.
-
-    ``slam`` is the pose and map estimate; ``odometry_pose`` (3,) the dead-reckoned pose in the
-    field frame (same start as SLAM); ``observations`` this step's landmark sightings;
-    ``last_seen_s`` maps a landmark id to the time (s) of its last sighting.
-    """
-
-    time_s: float
-    slam: SlamEstimate
-    odometry_pose: FloatArray
-    observations: tuple[LandmarkObservation, ...]
-    last_seen_s: dict[int, float]

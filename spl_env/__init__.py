@@ -11,12 +11,14 @@ from __future__ import annotations
 
 from gymnasium.envs.registration import register, registry
 
-ENV_IDS: tuple[str, ...] = ("SPL/ActiveVision-v0",)
+_ENTRY_POINTS = {
+    "SPL/ActiveVision-v0": "spl_env.envs.active_vision:ActiveVisionEnv",
+    "SPL/LookAround-v0": "spl_env.envs.look_around:LookAroundEnv",
+}
+ENV_IDS: tuple[str, ...] = tuple(_ENTRY_POINTS)
 
-_ENTRY_POINTS = {"SPL/ActiveVision-v0": "spl_env.envs.active_vision:ActiveVisionEnv"}
-
-for _env_id in ENV_IDS:
+for _env_id, _entry_point in _ENTRY_POINTS.items():
     if _env_id not in registry:
-        register(id=_env_id, entry_point=_ENTRY_POINTS[_env_id], max_episode_steps=None)
+        register(id=_env_id, entry_point=_entry_point, max_episode_steps=None)
 
 __all__ = ["ENV_IDS"]

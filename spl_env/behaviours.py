@@ -1,18 +1,22 @@
 """Scripted walking behaviours: waypoint following, patrols and random walkers.
 
 Commands are body-frame velocities ``(vx, vy, omega)`` in m/s and rad/s for
-:meth:`spl_env.sim.robot.NaoRobot.walk_step`; poses are ``(x, y, theta)`` in the field frame.
+:meth:`spl_env.robots.nao.NaoRobot.walk_step`; poses are ``(x, y, theta)`` in the field frame.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from perception.geometry import FloatArray, wrap_angle
 from spl_env.field import FieldDimensions
+from spl_env.robots.nao import NaoRobot
+from spl_env.sim.placement import Placement
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -89,3 +93,39 @@ class WaypointWalker:
             self.target = self._random_target()
             self.stuck_s = 0.0
         return waypoint_command(self.config, pose, self.target)
+
+
+class WanderingRobots:
+    """Scripted robots that each walk to random waypoints inside the field and, when stuck
+    for a second, pick another."""
+
+    def __init__(self, config: WalkerConfig, field: FieldDimensions) -> None:
+        self.config = config
+        self.field = field
+        self._walkers: list[WaypointWalker] = []
+
+    def reset(
+        self,
+        rng: np.random.Generator,
+        robots: Sequence[NaoRobot],
+        placement: Placement,
+        placed: list[NaoRobot],
+    ) -> None:
+        """Give each of ``robots`` a walker and a free pose clear of ``placed`` (to which each
+        placed robot is appended)."""
+        self._walkers = []
+        for robot in robots:
+            walker = WaypointWalker(self.config, self.field, rng)
+            robot.place(placement.free_pose(rng, placed))
+            placed.append(robot)
+            self._walkers.append(walker)
+
+    def commands(
+        self, poses: FloatArray, dt_s: float, blocked: Sequence[bool] | NDArray[np.bool_]
+    ) -> list[FloatArray]:
+        """Walk commands (3,) of the robots at ``poses`` (N, 3), in :meth:`reset`'s order;
+        ``blocked`` (N,) says which bumped into something last step."""
+        return [
+            walker.command(pose, dt_s, blocked=bool(b))
+            for walker, pose, b in zip(self._walkers, poses, blocked, strict=True)
+        ]

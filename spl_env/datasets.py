@@ -41,9 +41,9 @@ from numpy.typing import NDArray
 from perception.geometry import FloatArray, project_points, range_bearing
 from perception.types import PoleCode
 from perception.vision.cnn_detector import OBJECT_CLASSES, pole_class_name
+from spl_env.robots.nao import NaoRobot, RobotConfig
+from spl_env.scenes.spl_field import SceneBodies, SceneConfig, build_scene
 from spl_env.sensors.camera import Camera, CameraConfig, EpisodeLighting, LightingRandomisation
-from spl_env.sim.robot import NaoRobot, RobotConfig
-from spl_env.sim.scene import SceneBodies, SceneConfig, build_scene
 from spl_env.sim.world import BulletWorld
 
 N_OTHER_ROBOTS = 4
@@ -102,7 +102,10 @@ def class_names(codes: tuple[PoleCode, ...]) -> tuple[str, ...]:
 class FrameSampler:
     """One scene (poster draw) with our robot and the others; draws labelled frames.
 
-    ``rng`` draws the posters and, afterwards, every frame. Call :meth:`close` when done.
+    The world is built from the envs' modules (:func:`spl_env.scenes.spl_field.build_scene`,
+    :class:`spl_env.robots.nao.NaoRobot`, :class:`spl_env.sensors.camera.Camera`). ``rng``
+    draws the posters (``scene.scene_seed`` is not used) and, afterwards, every frame. Call
+    :meth:`close` when done.
     """
 
     def __init__(

@@ -3,8 +3,11 @@
 Generic over any tree of dataclasses (fields whose annotation is a dataclass, or a dataclass
 ``| None``, are nested configs)::
 
-    apply_overrides(config, {"sim.camera.noise_std": 0.0, "episode_s": 30, "frontend": "colour"},
-                    aliases={"frontend": "perception.frontend"})
+    apply_overrides(
+        config,
+        {"sensors.camera.noise_std": 0.0, "control_dt_s": 0.2, "frontend": "colour"},
+        aliases={"frontend": "perception.pole_sightings"},
+    )
 
 A key is a dotted path from the root, a top-level field name (a one-element path) or an alias
 from a short explicit table. A bare name is never looked up anywhere else in the tree, so adding
@@ -264,7 +267,7 @@ def apply_overrides(
 ) -> T:
     """A copy of the dataclass ``config`` with the fields named in ``overrides`` replaced.
 
-    Each key is a dotted path from the root (``"sim.camera.noise_std"``), a top-level field
+    Each key is a dotted path from the root (``"sensors.camera.noise_std"``), a top-level field
     name, or an alias in ``aliases`` (alias -> dotted path; an alias must be a bare name, must
     map to a field, and must not be a top-level field name, else ``ValueError``). A bare name
     that is neither raises ``TypeError`` listing the dotted paths where that name occurs.

@@ -14,10 +14,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from perception.geometry import FloatArray
-from perception.types import LandmarkObservation, PerceptionOutput, PoleCode
+from perception.representations import ODOMETRY_POSE, SELF_POSE, PerceptionOutput
+from perception.types import LandmarkObservation, PoleCode, SlamEstimate
 from spl_env.field import FieldDimensions
-from spl_env.sim.scene import POLE_BAND_RGBA
-from spl_env.simulation import WorldState
+from spl_env.scenes.spl_field import POLE_BAND_RGBA
+from spl_env.world_state import WorldState
 
 PX_PER_M = 40
 CHI2_2DOF_95 = 5.991  # 95 % quantile of chi-square with 2 dof
@@ -78,24 +79,29 @@ class TopDownView:
     def draw(
         self, state: WorldState, output: PerceptionOutput, codes: tuple[PoleCode, ...]
     ) -> NDArray[np.uint8]:
-        """(H, W, 3) BGR top-down picture of the truth and the belief."""
+        """(H, W, 3) BGR top-down picture of the truth and the belief (what of ``self_pose``
+        and ``odometry_pose`` the output holds)."""
         img = self.background.copy()
         colour_of = {c.landmark_id: c for c in codes}
         for lid, xy in zip(state.landmark_ids, state.landmarks, strict=True):
             code = colour_of[int(lid)]
             cv2.circle(img, self.px(xy), 7, _bgr(code.top), -1)
             cv2.circle(img, self.px(xy), 3, _bgr(code.bottom), -1)
-        slam = output.slam
-        for lid, xy, cov in zip(slam.landmark_ids, slam.landmarks, slam.landmark_covs, strict=True):
-            self._ellipse(img, xy, cov, SLAM_BGR)
-            c = self.px(xy)
-            cv2.drawMarker(img, c, _bgr(colour_of[int(lid)].top), cv2.MARKER_CROSS, 10, 2)
         for pose, team in zip(state.robots, state.robot_teams, strict=True):
             self._robot(img, pose, TEAM_BGR[int(team)])
         cv2.circle(img, self.px(state.ball), 4, (255, 255, 255), -1)
-        self._robot(img, output.odometry_pose, ODOM_BGR)
-        self._ellipse(img, slam.pose[:2], slam.pose_cov[:2, :2], SLAM_BGR)
-        self._robot(img, slam.pose, SLAM_BGR)
+        if ODOMETRY_POSE in output:
+            self._robot(img, output[ODOMETRY_POSE], ODOM_BGR)
+        if SELF_POSE in output:
+            slam = output.get_as(SELF_POSE, SlamEstimate)
+            for lid, xy, cov in zip(
+                slam.landmark_ids, slam.landmarks, slam.landmark_covs, strict=True
+            ):
+                self._ellipse(img, xy, cov, SLAM_BGR)
+                c = self.px(xy)
+                cv2.drawMarker(img, c, _bgr(colour_of[int(lid)].top), cv2.MARKER_CROSS, 10, 2)
+            self._ellipse(img, slam.pose[:2], slam.pose_cov[:2, :2], SLAM_BGR)
+            self._robot(img, slam.pose, SLAM_BGR)
         self._robot(img, state.robot_pose, TRUE_BGR)
         return img
 

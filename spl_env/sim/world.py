@@ -234,6 +234,11 @@ class BulletWorld:
         pos, _ = p.getBasePositionAndOrientation(self.body(name), physicsClientId=self.client)
         return np.asarray(pos, dtype=np.float64)
 
+    def velocity(self, name: str) -> FloatArray:
+        """World linear velocity (3,) (m/s) of body ``name``'s base."""
+        linear, _ = p.getBaseVelocity(self.body(name), physicsClientId=self.client)
+        return np.asarray(linear, dtype=np.float64)
+
     def set_velocity(
         self, name: str, linear: Sequence[float], angular: Sequence[float] = (0.0, 0.0, 0.0)
     ) -> None:

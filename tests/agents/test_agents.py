@@ -11,22 +11,25 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from agents.baselines import FixedHead, HeadScan, LookAtStalest, head_action
+import spl_env
+from agents.baselines import BASELINES, FixedHead, HeadScan, LookAtStalest
 from agents.demo import main as demo_main
 from agents.evaluate import (
     EpisodeRecord,
     env_kwargs_for,
     episode_metrics,
+    load_policy,
     parse_overrides,
+    run_episode,
     summarise,
 )
 from agents.evaluate import main as evaluate_main
 from agents.train import default_config_path, load_config, train
-from spl_env.config import EnvConfig
-from spl_env.envs.active_vision import ActiveVisionEnv
+from spl_env.envs.active_vision import ActiveVisionConfig
+from spl_env.robots.nao import head_action, head_target
 
-CONFIG = EnvConfig()
-ROBOT = CONFIG.sim.robot
+CONFIG = ActiveVisionConfig()
+ROBOT = CONFIG.robot
 
 
 def _obs(n: int = 6) -> dict[str, np.ndarray]:
@@ -39,11 +42,16 @@ def _obs(n: int = 6) -> dict[str, np.ndarray]:
 
 
 @pytest.mark.parametrize("yaw_deg, pitch_deg", [(0, 0), (30, -10), (-119.5, 29.5), (90, -38.5)])
-def test_head_action_inverts_the_envs_action_scaling(yaw_deg: float, pitch_deg: float) -> None:
-    env = ActiveVisionEnv(episode_s=1.0)
-    target = env._head_target(head_action(ROBOT, math.radians(yaw_deg), math.radians(pitch_deg)))
-    env.close()
+def test_look_inverts_the_envs_action_scaling(yaw_deg: float, pitch_deg: float) -> None:
+    action = FixedHead.from_config(CONFIG).look(math.radians(yaw_deg), math.radians(pitch_deg))
+    assert action.dtype == np.float32 and action.shape == (2,)
+    target = head_target(ROBOT, action)
     np.testing.assert_allclose(np.degrees(target), [yaw_deg, pitch_deg], atol=1e-4)
+
+
+def test_look_beyond_the_joint_limits_is_clipped_to_the_action_space() -> None:
+    action = FixedHead.from_config(CONFIG).look(math.radians(150.0), math.radians(-60.0))
+    np.testing.assert_array_equal(action, np.array([1.0, -1.0], np.float32))
 
 
 def test_head_scan_is_the_sinusoid() -> None:
@@ -74,6 +82,24 @@ def test_look_at_stalest_points_at_least_recent_pole() -> None:
     obs["landmarks_cos_bearing"][5] = -1.0
     action, _ = LookAtStalest.from_config(CONFIG).predict(obs)
     assert action[0] == pytest.approx(30.0 / 119.5, abs=1e-6)
+
+
+@pytest.mark.parametrize("env_id", spl_env.ENV_IDS)
+@pytest.mark.parametrize("name", sorted(BASELINES))
+def test_baselines_run_on_every_env(env_id: str, name: str) -> None:
+    env = gym.make(env_id, camera_mode="geometric", frontend="colour", episode_s=1.0)
+    record = run_episode(env, load_policy(name, env.get_wrapper_attr("config")), seed=0)
+    env.close()
+    assert len(record.true_poses) == 11 and all(s > 0 for s in record.step_seconds[1:])
+
+
+def test_evaluation_needs_the_full_info() -> None:
+    env = gym.make(
+        "SPL/LookAround-v0", camera_mode="geometric", frontend="colour", info_level="light"
+    )
+    with pytest.raises(ValueError, match="info_level='full'"):
+        run_episode(env, load_policy("fixed", env.get_wrapper_attr("config")), seed=0)
+    env.close()
 
 
 def test_fixed_head_and_override_parsing() -> None:
@@ -160,6 +186,7 @@ def test_evaluate_writes_metrics_and_plot(tmp_path: Path) -> None:
     result = _strict_json(tmp_path / "metrics.json")
     first, second = result["episodes"]
     assert first["steps"] == second["steps"] == 20
+    assert first["mean_step_ms"] > 0 and second["mean_step_ms"] > 0
     assert first["mean_position_error_m"] != second["mean_position_error_m"]  # different seeds
     for key in ("return", "mean_position_error_m", "mean_odometry_error_m", "mean_pose_nees"):
         assert result["mean"][key] == pytest.approx((first[key] + second[key]) / 2)
@@ -168,25 +195,47 @@ def test_evaluate_writes_metrics_and_plot(tmp_path: Path) -> None:
         evaluate_main(["--policy", "nonsense", "--episodes", "1", "--out", str(tmp_path)])
 
 
-def test_no_mapped_landmark_is_null_not_nan() -> None:
+def _record(mapped: list[bool], estimates: np.ndarray) -> EpisodeRecord:
+    """Two steps at the origin, poles 3 and 5 at (1, 1) and (2, 2); the map in info's layout."""
     pose = np.zeros(3)
-    record = EpisodeRecord(
+    ids = np.array([3, 5])
+    return EpisodeRecord(
         true_poses=[pose, pose],
         slam_poses=[pose, pose],
         odometry_poses=[pose, pose],
         pose_covs=[np.eye(3), np.eye(3)],
         step_seconds=[0.0, 0.01],
         final_info={
-            "ground_truth": {"landmark_ids": np.array([0]), "landmarks": np.array([[1.0, 1.0]])},
-            "perception": {"landmark_ids": np.zeros(0, np.int64), "landmarks": np.zeros((0, 2))},
+            "ground_truth": {"landmark_ids": ids, "landmarks": np.array([[1.0, 1.0], [2.0, 2.0]])},
+            "perception": {
+                "landmark_ids": ids,
+                "landmarks": estimates,
+                "landmarks_mapped": np.array(mapped),
+            },
         },
     )
-    metrics = episode_metrics(record)
+
+
+def test_only_mapped_landmarks_are_scored() -> None:
+    metrics = episode_metrics(_record([False, True], np.array([[0.0, 0.0], [2.0, 2.5]])))
+    assert metrics["landmarks_mapped"] == 1
+    assert metrics["mean_landmark_error_m"] == pytest.approx(0.5)
+
+
+def test_no_mapped_landmark_is_null_not_nan() -> None:
+    metrics = episode_metrics(_record([False, False], np.zeros((2, 2))))
     assert metrics["landmarks_mapped"] == 0 and metrics["mean_landmark_error_m"] is None
     assert "null" in json.dumps(metrics, allow_nan=False)
     mapped = {**metrics, "mean_landmark_error_m": 0.3}
     assert summarise([metrics, metrics])["mean_landmark_error_m"] is None
     assert summarise([metrics, mapped])["mean_landmark_error_m"] == pytest.approx(0.3)
+
+
+def test_demo_writes_its_pictures_and_metrics(tmp_path: Path) -> None:
+    demo_main(["--out", str(tmp_path), "--frames", "2", "--set", "episode_s=1"])
+    assert _strict_json(tmp_path / "metrics.json")["steps"] == 10
+    for name in ("frames.png", "trajectory.png"):
+        assert (tmp_path / name).stat().st_size > 0
 
 
 @pytest.mark.parametrize(

@@ -33,7 +33,19 @@ def test_replay_of_a_recording_matches_the_live_filter(backend: str) -> None:
     np.testing.assert_allclose(result.poses, np.array(live.slam_poses), atol=1e-12)
 
 
+def test_rendered_recording_runs_every_front_end_on_the_envs_frames() -> None:
+    env = gym.make("SPL/ActiveVision-v0", frontend="colour", episode_s=3.0)
+    config = env.get_wrapper_attr("config")
+    live = run_episode(env, load_policy("scan", config), seed=2)
+    frontends = frontends_for(env, ("colour", "cnn"))
+    log = record_episode(env, load_policy("scan", config), 2, frontends)
+    env.close()
+    assert all(sum(len(s) for s in log.sightings[name]) > 5 for name in ("colour", "cnn"))
+    result = replay(log, "colour", config.perception.slam)
+    np.testing.assert_allclose(result.poses, np.array(live.slam_poses), atol=1e-12)
+
+
 def test_recording_needs_an_spl_env() -> None:
     env = gym.make("CartPole-v1")
-    with pytest.raises(TypeError, match="ActiveVisionEnv"):
+    with pytest.raises(TypeError, match="SplEnv"):
         frontends_for(env, ("colour",))

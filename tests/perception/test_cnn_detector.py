@@ -31,7 +31,7 @@ from perception.vision.cnn_model import (
     encode,
     fuse_batch_norms,
 )
-from perception.vision.train_detector import TrainConfig
+from training.train_detector import TrainConfig
 
 CAMERA = CameraModel()
 POLE = PoleGeometry()

@@ -1,20 +1,17 @@
 """Pole distance from band edges: exact on drawn poles, sub-pixel on blended edges, rejection of
-edges off the line, and on rendered frames against the labels' true range."""
+edges off the line (on rendered frames against the labels' true range:
+``tests/spl_env/test_pole_edges_rendered.py``)."""
 
 from __future__ import annotations
 
-import json
 import math
-from pathlib import Path
 
-import cv2
 import numpy as np
 import pytest
 from drawn_poles import CAMERA, COLOURS, POLE, detection_of, draw_band_across, draw_pole
 
 from perception.types import CameraState, PoleCode
 from perception.vision import CnnDetectorConfig, CnnPoleDetector, Detection
-from perception.vision.cnn_detector import vertical_lean
 from perception.vision.pole_edges import (
     EdgeFit,
     PoleEdgeConfig,
@@ -23,7 +20,6 @@ from perception.vision.pole_edges import (
     pole_edge_distance,
     pole_width_distance,
 )
-from spl_env.datasets import DatasetConfig, generate
 
 CONFIG = PoleEdgeConfig()
 LEVEL = np.eye(3)  # a level camera looking along the robot's x axis
@@ -136,55 +132,6 @@ def test_relative_variance_follows_least_squares() -> None:
 def test_config_refuses_bad_values(field: str, value: object, error: type) -> None:
     with pytest.raises(error, match=field):
         PoleEdgeConfig(**{field: value})  # type: ignore[arg-type]
-
-
-@pytest.fixture(scope="module")
-def rendered(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    out = tmp_path_factory.mktemp("poles")
-    config = DatasetConfig(
-        aim_probability=1.0, occluder_probability=0.0, blur_probability=0.0, sway_probability=0.0
-    )
-    generate(config, out, images=20, seed=11, scenes=1)
-    return out
-
-
-def test_rendered_poles_measured_against_their_true_range(rendered: Path) -> None:
-    """Label boxes and junctions of whole, unoccluded poles stand in for detections; the edge
-    distance, turned into a range from the robot origin, matches the label's true range."""
-    records = [json.loads(line) for line in (rendered / "labels.jsonl").read_text().splitlines()]
-    errors = []
-    for record in records:
-        image = cv2.cvtColor(
-            cv2.imread(str(rendered / "images" / record["image"])), cv2.COLOR_BGR2RGB
-        )
-        state = CameraState(
-            position=np.array(record["camera_state"]["position"]),
-            head_yaw=record["camera_state"]["head_yaw"],
-            head_pitch=record["camera_state"]["head_pitch"],
-            tilt=record["camera_state"]["tilt"],
-        )
-        rotation = state.rotation()
-        for obj in record["objects"]:
-            if obj["landmark_id"] is None or obj["truncated"] or obj["occluded_fraction"] > 0:
-                continue
-            if not obj["keypoint_visible"] or obj["range_m"] > 6.0:
-                continue
-            box = np.array(obj["box"], np.float64) + np.array([-0.5, -0.5, 0.5, 0.5])
-            keypoint = np.array(obj["keypoint"])
-            lean = vertical_lean(box, CAMERA, rotation)
-            result = pole_edge_distance(
-                image, box, keypoint, lean, CAMERA, rotation, state.position[2], POLE, CONFIG
-            )
-            if result is None:
-                continue
-            bearing = obj["bearing_rad"]
-            axis = obj["range_m"] * np.array([math.cos(bearing), math.sin(bearing)])
-            true_distance = float(np.linalg.norm(axis - state.position[:2]))
-            errors.append(result.distance_m / true_distance - 1.0)
-    assert len(errors) >= 6
-    # each within 4 %, the mean within 1.5 % (the CNN's box extents give 3-5 % on average)
-    assert np.max(np.abs(errors)) < 0.04
-    assert abs(float(np.mean(errors))) < 0.015
 
 
 def test_detector_measures_from_edges_when_it_has_the_image() -> None:

@@ -98,15 +98,68 @@ def test_reset_with_same_seed_repeats_episode(env: gym.Env) -> None:
 
 
 def test_info_contract(env: gym.Env) -> None:
-    _, info = env.reset(seed=0)
+    _, first = env.reset(seed=0)
     _, _, _, _, info = env.step(env.action_space.sample())
+    assert set(info) == set(first) == {"perception", "ground_truth", "reward_terms"}
+    assert "timing" not in info  # only with info_timing=True
     per, gt = info["perception"], info["ground_truth"]
-    assert per["pose"].shape == (3,) and per["pose_cov"].shape == (3, 3)
-    assert per["odometry_pose"].shape == (3,)
-    assert per["landmarks"].shape == (len(per["landmark_ids"]), 2)
-    assert gt["robot_pose"].shape == (3,) and gt["landmarks"].shape == (6, 2)
+    n = len(per["landmark_ids"])
+    assert n == 6
+    shapes = {
+        "pose": (3,),
+        "pose_cov": (3, 3),
+        "odometry_pose": (3,),
+        "landmark_ids": (n,),
+        "landmarks": (n, 2),
+        "landmark_covs": (n, 2, 2),
+        "landmarks_mapped": (n,),
+        "sightings": (n, 2),
+        "sighted": (n,),
+    }
+    assert {k: v.shape for k, v in per.items()} == shapes
+    assert per["landmarks_mapped"].dtype == np.bool_ and per["sighted"].dtype == np.bool_
+    assert np.all(per["landmarks"][~per["landmarks_mapped"]] == 0.0)
+    assert np.all(per["landmark_covs"][~per["landmarks_mapped"]] == 0.0)
+    assert np.all(per["sightings"][~per["sighted"]] == 0.0)
+    n_others = env.unwrapped.config.task.n_other_robots
+    assert {k: v.shape for k, v in gt.items()} == {
+        "robot_pose": (3,),
+        "head": (2,),
+        "landmarks": (6, 2),
+        "landmark_ids": (6,),
+        "robots": (n_others, 3),
+        "robot_teams": (n_others,),
+        "ball": (2,),
+        "ball_velocity": (2,),
+    }
+    np.testing.assert_array_equal(per["landmark_ids"], gt["landmark_ids"])
+    # every entry keeps its shape from step to step (vector envs stack them)
+    for part in ("perception", "ground_truth"):
+        for key, value in info[part].items():
+            assert np.shape(first[part][key]) == np.shape(value), key
     assert set(info["reward_terms"]) == {"position_error", "uncertainty"}
-    assert set(info["timing"]) == {"physics", "render", "sensors", "perception"}
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_info_timing_and_light_info_on_request(env_id: str) -> None:
+    timed = gym.make(env_id, info_timing=True, **FAST)
+    _, info = timed.reset(seed=0)
+    for _ in range(2):
+        *_, info = timed.step(timed.action_space.sample())
+        timing = info["timing"]
+        assert type(timing) is dict
+        assert set(timing) == {"physics", "render", "sensors", "perception"}
+        assert all(isinstance(s, float) and s >= 0.0 for s in timing.values())
+    timed.close()
+    light = gym.make(env_id, info_level="light", **FAST)
+    _, info = light.reset(seed=0)
+    assert set(info) == {"reward_terms"}
+    obs, reward, *_, info = light.step(light.action_space.sample())
+    assert set(info) == {"reward_terms"} and reward == pytest.approx(
+        sum(info["reward_terms"].values())
+    )
+    assert light.observation_space.contains(obs)
+    light.close()
 
 
 def test_truncates_after_episode_length(env: gym.Env) -> None:
@@ -157,11 +210,28 @@ def test_step_before_reset_raises() -> None:
 
 
 def test_make_kwargs_override_config_fields() -> None:
-    e = gym.make(ENV_IDS[0], episode_s=2.0, n_other_robots=1, noise_std=0.0)
+    e = gym.make(ENV_IDS[0], episode_s=2.0, n_other_robots=1, **{"sensors.camera.noise_std": 0.0})
     cfg = e.unwrapped.config
-    assert cfg.episode_s == 2.0 and cfg.sim.n_other_robots == 1 and cfg.sim.camera.noise_std == 0.0
+    assert cfg.task.episode_s == 2.0 and cfg.task.n_other_robots == 1
+    assert cfg.sensors.camera.noise_std == 0.0 and cfg.max_steps == 20
     e.close()
-    with pytest.raises(TypeError, match="unknown config field"):
+    with pytest.raises(TypeError, match="unknown config key 'no_such_field'"):
         gym.make(ENV_IDS[0], no_such_field=1)
+    with pytest.raises(TypeError, match=r"did you mean.*'sensors\.camera\.noise_std'"):
+        gym.make(ENV_IDS[0], noise_std=0.0)
     with pytest.raises(ValueError, match="episode_s"):
         gym.make(ENV_IDS[0], episode_s=-1.0)
+
+
+def test_every_id_is_registered_with_its_own_env_class() -> None:
+    from spl_env.envs.active_vision import ActiveVisionEnv
+    from spl_env.envs.look_around import LookAroundEnv
+
+    assert ENV_IDS == ("SPL/ActiveVision-v0", "SPL/LookAround-v0")
+    classes = []
+    for env_id in ENV_IDS:
+        e = gym.make(env_id, **FAST)
+        classes.append(type(e.unwrapped))
+        assert e.spec is not None and e.spec.id == env_id
+        e.close()
+    assert classes == [ActiveVisionEnv, LookAroundEnv]

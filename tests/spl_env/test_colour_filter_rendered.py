@@ -22,9 +22,9 @@ import pytest
 from perception.geometry import FloatArray, range_bearing, wrap_angle
 from perception.types import LandmarkObservation
 from perception.vision import ColourFilterConfig, ColourPoleDetector
+from spl_env.robots.nao import NaoRobot, RobotConfig
+from spl_env.scenes.spl_field import SceneBodies, SceneConfig, build_scene
 from spl_env.sensors.camera import Camera, CameraConfig, EpisodeLighting, LightingRandomisation
-from spl_env.sim.robot import NaoRobot, RobotConfig
-from spl_env.sim.scene import SceneBodies, SceneConfig, build_scene
 from spl_env.sim.world import BulletWorld
 
 NEAR_M = 5.0  # every fully visible pole nearer than this must be found, within these errors:

@@ -1,182 +1,398 @@
-"""``with_overrides``: ``gym.make`` keyword arguments onto the nested frozen ``EnvConfig``."""
+"""The SPL envs' configs and their keyword overrides: dotted paths, top-level names and aliases.
+
+The generic mechanism (:func:`spl_env.overrides.apply_overrides` on toy config trees) is tested
+in ``test_overrides.py``; here: the env configs' own validation, their alias tables, and what
+the envs' keyword arguments reach.
+"""
 
 from __future__ import annotations
 
+import dataclasses
+import re
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 import pytest
 
-from spl_env.config import EnvConfig, with_overrides
+import spl_env  # noqa: F401  (registers the env ids)
+from perception.pipeline import PipelineConfig
+from spl_env.config import SPL_ALIASES, EnvConfig
+from spl_env.envs.active_vision import ACTIVE_VISION_ALIASES, ActiveVisionConfig
+from spl_env.envs.look_around import LookAroundConfig
+from spl_env.overrides import apply_overrides, config_paths
+from spl_env.scenes.spl_field import SceneConfig
 from spl_env.sensors.laser import LaserConfig
+from spl_env.sensors.rig import RigConfig
+from spl_env.tasks.active_vision import ActiveVisionTaskConfig
+from spl_env.tasks.base import TaskConfig
+from spl_env.tasks.head_control import HeadControlTaskConfig
+
+# every env config class with the alias table its env uses
+ENV_CONFIGS: list[tuple[type[EnvConfig], dict[str, str]]] = [
+    (EnvConfig, SPL_ALIASES),
+    (ActiveVisionConfig, ACTIVE_VISION_ALIASES),
+    (LookAroundConfig, SPL_ALIASES),
+]
 
 
-def test_unique_names_and_dotted_paths_reach_nested_fields() -> None:
-    config = with_overrides(EnvConfig(), episode_s=30, **{"sim.camera.noise_std": 0.01})
-    assert config.episode_s == 30.0 and type(config.episode_s) is float
-    assert config.sim.camera.noise_std == 0.01
-    assert with_overrides(EnvConfig(), n_other_robots=2).sim.n_other_robots == 2
+def av(**overrides: Any) -> ActiveVisionConfig:
+    """``ActiveVisionConfig()`` with ``overrides`` as ``SPL/ActiveVision-v0`` applies them."""
+    return apply_overrides(ActiveVisionConfig(), overrides, ACTIVE_VISION_ALIASES)
+
+
+# --- the alias tables --------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(("config_class", "aliases"), ENV_CONFIGS)
+def test_every_alias_names_an_existing_path_and_shadows_no_top_level_field(
+    config_class: type[EnvConfig], aliases: dict[str, str]
+) -> None:
+    paths = {path for found in config_paths(config_class).values() for path in found}
+    top_level = {f.name for f in dataclasses.fields(config_class)}
+    for alias, path in aliases.items():
+        assert path in paths, f"alias {alias!r} -> {path!r} is no field of {config_class}"
+        assert "." not in alias and alias not in top_level
+    apply_overrides(config_class(), {}, aliases)  # the table itself is accepted
+
+
+@pytest.mark.parametrize(("config_class", "aliases"), ENV_CONFIGS)
+def test_each_alias_sets_the_field_of_its_path(
+    config_class: type[EnvConfig], aliases: dict[str, str]
+) -> None:
+    default = config_class()
+    for alias, path in aliases.items():
+        value: Any = default
+        for name in path.split("."):
+            value = getattr(value, name)
+        assert apply_overrides(default, {alias: value}, aliases) == default
+        # the alias and its path are one field: setting both is setting it twice
+        with pytest.raises(TypeError, match=f"'{re.escape(path)}' is set twice"):
+            apply_overrides(default, {alias: value, path: value}, aliases)
+
+
+def test_the_shared_table_is_inside_the_active_vision_table() -> None:
+    assert SPL_ALIASES.items() <= ACTIVE_VISION_ALIASES.items()
+    assert set(ACTIVE_VISION_ALIASES) - set(SPL_ALIASES) == {"body_behaviour", "square_side_m"}
+
+
+def test_an_alias_may_not_shadow_a_top_level_field() -> None:
+    with pytest.raises(ValueError, match="would shadow the top-level field 'control_dt_s'"):
+        apply_overrides(EnvConfig(), {}, {**SPL_ALIASES, "control_dt_s": "task.episode_s"})
+    # a top-level name keeps meaning its own field
+    assert apply_overrides(EnvConfig(), {"control_dt_s": 0.2}, SPL_ALIASES).control_dt_s == 0.2
+
+
+def test_the_active_vision_aliases_fit_no_other_task() -> None:
+    with pytest.raises(ValueError, match=r"'body_behaviour' maps to 'task\.body_behaviour'"):
+        apply_overrides(EnvConfig(), {}, ACTIVE_VISION_ALIASES)
+    with pytest.raises(TypeError, match="unknown config key 'body_behaviour'"):
+        apply_overrides(LookAroundConfig(), {"body_behaviour": "square"}, SPL_ALIASES)
+
+
+# --- what keys reach ---------------------------------------------------------------------------
+
+
+def test_dotted_paths_top_level_names_and_aliases_reach_their_fields() -> None:
+    config = av(episode_s=30, control_dt_s=0.2, **{"sensors.camera.noise_std": 0.01})
+    assert config.task.episode_s == 30.0 and type(config.task.episode_s) is float
+    assert config.control_dt_s == 0.2 and config.sensors.camera.noise_std == 0.01
+    assert av(n_other_robots=2).task.n_other_robots == 2
+    assert av(body_behaviour="square", square_side_m=2).task == ActiveVisionTaskConfig(
+        body_behaviour="square", square_side_m=2.0
+    )
+    assert av(camera_mode="geometric", frontend="colour").sensors.camera_mode == "geometric"
+    assert av(randomise_lighting=True).sensors.camera.randomise_lighting is True
+    assert av(self_pose="oracle").perception.self_pose == "oracle"
+    assert av(**{"task.episode_s": 6}).task.episode_s == 6.0
+
+
+@pytest.mark.parametrize(
+    ("key", "paths"),
+    [
+        ("noise_std", ["sensors.camera.noise_std"]),
+        ("mount_height_m", ["sensors.sonar.mount_height_m", "sensors.laser.mount_height_m"]),
+        ("n_beams", ["sensors.laser.n_beams"]),
+        ("walker", ["task.walker"]),
+        ("offset_outside_m", ["scene.poles.offset_outside_m"]),
+    ],
+)
+def test_bare_nested_names_are_refused_with_their_dotted_paths(key: str, paths: list[str]) -> None:
+    with pytest.raises(TypeError, match=f"unknown config key '{key}'") as raised:
+        av(**{key: 1.0})
+    message = str(raised.value)
+    assert "did you mean" in message
+    for path in paths:
+        assert repr(path) in message
+
+
+def test_the_hint_names_the_alias_of_a_refused_bare_name() -> None:
+    with pytest.raises(TypeError, match=r"'perception\.pole_sightings'.*'frontend'"):
+        av(pole_sightings="colour")
+    with pytest.raises(TypeError, match=r"'sensors\.camera\.randomise_lighting'.*alias"):
+        av(**{"randomise_lightning": True})  # a typo gets the near names
 
 
 def test_overrides_apply_together_so_validation_sees_related_fields() -> None:
-    a = with_overrides(EnvConfig(), physics_dt_s=0.05, control_dt_s=0.2, episode_s=2.0)
-    b = with_overrides(EnvConfig(), episode_s=2.0, control_dt_s=0.2, physics_dt_s=0.05)
-    assert a == b and a.max_steps == 10
+    a = av(physics_dt_s=0.05, control_dt_s=0.2, episode_s=2.0)
+    b = av(episode_s=2.0, control_dt_s=0.2, physics_dt_s=0.05)
+    assert a == b and a.max_steps == 10 and a.substeps == 4
 
 
 def test_sub_fields_of_an_optional_config_that_is_none_start_from_its_defaults() -> None:
-    assert EnvConfig().sim.laser is None
-    for overrides in ({"n_beams": 90}, {"sim.laser.n_beams": 90}, {"laser": {"n_beams": 90}}):
-        assert with_overrides(EnvConfig(), **overrides).sim.laser == LaserConfig(n_beams=90)
-    with_laser = with_overrides(EnvConfig(), laser=LaserConfig(n_beams=90))
-    config = with_overrides(with_laser, **{"sim.laser.fov_deg": 90})
-    assert config.sim.laser == LaserConfig(n_beams=90, fov_deg=90.0)
-    assert with_overrides(EnvConfig(), laser={}).sim.laser == LaserConfig()
-    assert with_overrides(EnvConfig(), sonar=None).sim.sonar is None
-
-
-def test_names_are_ambiguous_whether_or_not_optional_parts_are_none() -> None:
-    # mount_height_m is in sim.sonar and sim.laser, even while laser is None
-    with pytest.raises(TypeError, match=r"mount_height_m.*ambiguous.*sim\.laser\.mount_height_m"):
-        with_overrides(EnvConfig(), mount_height_m=0.4)
-    config = with_overrides(EnvConfig(), **{"sim.laser.mount_height_m": 0.4})
-    assert config.sim.laser == LaserConfig(mount_height_m=0.4)
+    assert ActiveVisionConfig().sensors.laser is None
+    for overrides in ({"sensors.laser.n_beams": 90}, {"laser": {"n_beams": 90}}):
+        assert av(**overrides).sensors.laser == LaserConfig(n_beams=90)
+    with_laser = av(laser=LaserConfig(n_beams=90))
+    config = apply_overrides(with_laser, {"sensors.laser.fov_deg": 90}, ACTIVE_VISION_ALIASES)
+    assert config.sensors.laser == LaserConfig(n_beams=90, fov_deg=90.0)
+    assert av(laser={}).sensors.laser == LaserConfig()
+    assert av(sonar=None).sensors.sonar is None
 
 
 def test_nested_lists_become_tuples_and_the_config_stays_hashable() -> None:
-    config = with_overrides(
-        EnvConfig(), recall_by_smear=[[2, 1], [8, np.float64(0.5)]], max_speed=[0.2, 0.1, 1]
+    config = av(
+        **{
+            "sensors.geometric_camera.recall_by_smear": [[2, 1], [8, np.float64(0.5)]],
+            "robot.max_speed": [0.2, 0.1, 1],
+        }
     )
-    assert config.sim.geometric_camera.recall_by_smear == ((2.0, 1.0), (8.0, 0.5))
-    assert all(
-        type(v) is float for pair in config.sim.geometric_camera.recall_by_smear for v in pair
-    )
-    assert config.sim.robot.max_speed == (0.2, 0.1, 1.0)
+    smear = config.sensors.geometric_camera.recall_by_smear
+    assert smear == ((2.0, 1.0), (8.0, 0.5))
+    assert all(type(v) is float for pair in smear for v in pair)
+    assert config.robot.max_speed == (0.2, 0.1, 1.0)
     hash(config)
 
 
 def test_numbers_accept_numpy_scalars_as_plain_python_numbers() -> None:
-    config = with_overrides(EnvConfig(), noise_std=np.float32(0.5), n_other_robots=np.int64(2))
-    assert config.sim.camera.noise_std == 0.5 and type(config.sim.camera.noise_std) is float
-    assert config.sim.n_other_robots == 2 and type(config.sim.n_other_robots) is int
+    config = av(n_other_robots=np.int64(2), **{"sensors.camera.noise_std": np.float32(0.5)})
+    assert config.sensors.camera.noise_std == 0.5 and type(config.sensors.camera.noise_std) is float
+    assert config.task.n_other_robots == 2 and type(config.task.n_other_robots) is int
 
 
 def test_caller_dicts_are_not_changed() -> None:
     camera = {"noise_std": 0.0}
-    sim: dict[str, Any] = {"camera": camera}
-    config = with_overrides(EnvConfig(), sim=sim, camera_mode="geometric", frontend="colour")
-    assert config.sim.camera.noise_std == 0.0 and config.sim.camera_mode == "geometric"
-    assert sim == {"camera": {"noise_std": 0.0}} and sim["camera"] is camera
+    sensors: dict[str, Any] = {"camera": camera}
+    config = av(sensors=sensors, camera_mode="geometric", frontend="colour")
+    assert config.sensors.camera.noise_std == 0.0 and config.sensors.camera_mode == "geometric"
+    assert sensors == {"camera": {"noise_std": 0.0}} and sensors["camera"] is camera
 
 
 @pytest.mark.parametrize(
-    "overrides, match",
+    ("overrides", "match"),
     [
-        ({"episode_s": "30"}, r"'episode_s' expects float, got str"),
-        ({"n_other_robots": 2.5}, r"'sim\.n_other_robots' expects int, got float"),
-        ({"n_other_robots": True}, r"'sim\.n_other_robots' expects int, got bool"),
-        ({"noise_std": False}, r"'sim\.camera\.noise_std' expects float, got bool"),
-        ({"randomise_lighting": 1}, r"'sim\.camera\.randomise_lighting' expects bool"),
-        ({"camera": None}, r"'sim\.camera' expects CameraConfig, got NoneType"),
-        ({"walker": None}, r"'walker' expects WalkerConfig, got NoneType"),
-        ({"episode_s": None}, r"'episode_s' expects float, got NoneType"),
-        ({"laser": 5}, r"'sim\.laser' expects .*LaserConfig \| None, got int"),
-        ({"n_beams": 90.0}, r"'sim\.laser\.n_beams' expects int, got float"),
+        ({"episode_s": "30"}, r"'task\.episode_s' expects float, got str"),
+        ({"episode_s": None}, r"'task\.episode_s' expects float, got NoneType"),
+        ({"episode_s": {"x": 1}}, r"'task\.episode_s' has no sub-fields"),
+        ({"n_other_robots": 2.5}, r"'task\.n_other_robots' expects int, got float"),
+        ({"n_other_robots": True}, r"'task\.n_other_robots' expects int, got bool"),
+        ({"sensors.camera.noise_std": False}, r"'sensors\.camera\.noise_std' expects float"),
+        ({"randomise_lighting": 1}, r"'sensors\.camera\.randomise_lighting' expects bool"),
+        ({"sensors.camera": None}, r"'sensors\.camera' expects CameraConfig, got NoneType"),
+        ({"task.walker": None}, r"'task\.walker' expects WalkerConfig, got NoneType"),
+        ({"laser": 5}, r"'sensors\.laser' expects .*LaserConfig \| None, got int"),
+        ({"sensors.laser.n_beams": 90.0}, r"'sensors\.laser\.n_beams' expects int, got float"),
+        ({"robot.max_speed": [0.2, 0.1]}, r"'robot\.max_speed' expects tuple\[float, float, float"),
+        ({"robot.max_speed": 0.2}, r"'robot\.max_speed' expects tuple.*got float"),
         (
-            {"max_speed": [0.2, 0.1]},
-            r"'sim\.robot\.max_speed' expects tuple\[float, float, float\]",
+            {"sensors.geometric_camera.recall_by_smear": [[2, 1], [8]]},
+            r"'sensors\.geometric_camera\.recall_by_smear' expects",
         ),
-        ({"max_speed": 0.2}, r"'sim\.robot\.max_speed' expects tuple.*got float"),
-        ({"recall_by_smear": [[2, 1], [8]]}, r"'sim\.geometric_camera\.recall_by_smear' expects"),
-        ({"recall_by_smear": [[2, "1"]]}, r"'sim\.geometric_camera\.recall_by_smear' expects"),
-        ({"recall_by_smear": [[2, True]]}, r"'sim\.geometric_camera\.recall_by_smear' expects"),
-        ({"pink_hsv": [[0, 0, 0], [1.5, 0, 0]]}, r"'perception\.colour_filter\.pink_hsv'"),
-        ({"no_such_field": 1}, r"unknown config field 'no_such_field'"),
-        ({"sim.camera.no_such_field": 1}, r"unknown config field 'sim\.camera\.no_such_field'"),
-        ({"camera": {"no_such_field": 1}}, r"unknown config field 'sim\.camera\.no_such_field'"),
-        ({"episode_s": {"x": 1}}, r"'episode_s' has no sub-fields"),
-        ({"max_range_m": 5.0}, r"'max_range_m' is ambiguous.*'sim\.sonar\.max_range_m'"),
+        (
+            {"sensors.geometric_camera.recall_by_smear": [[2, True]]},
+            r"'sensors\.geometric_camera\.recall_by_smear' expects",
+        ),
+        (
+            {"perception.colour_filter.pink_hsv": [[0, 0, 0], [1.5, 0, 0]]},
+            r"'perception\.colour_filter\.pink_hsv'",
+        ),
+        ({"no_such_field": 1}, r"unknown config key 'no_such_field'"),
+        ({"sensors.camera.no_such_field": 1}, r"unknown config key 'sensors\.camera\.no_such"),
+        (
+            {"sensors": {"camera": {"no_such_field": 1}}},
+            r"unknown config field 'sensors\.camera\.no_such_field' \(in the value of key",
+        ),
+        # the old paths are gone
+        ({"sim.camera.noise_std": 0.0}, r"unknown config key 'sim\.camera\.noise_std'"),
+        ({"perception.frontend": "colour"}, r"unknown config key 'perception\.frontend'"),
     ],
 )
 def test_bad_overrides_raise_type_errors_naming_the_field(
     overrides: dict[str, Any], match: str
 ) -> None:
     with pytest.raises(TypeError, match=match):
-        with_overrides(EnvConfig(), **overrides)
+        av(**overrides)
 
 
 @pytest.mark.parametrize(
-    "overrides, match",
+    ("overrides", "match"),
     [
         (
-            {"noise_std": 0.0, "sim.camera.noise_std": 0.02},
-            r"'sim\.camera\.noise_std' is set twice",
+            {"randomise_lighting": True, "sensors.camera.randomise_lighting": False},
+            r"'sensors\.camera\.randomise_lighting' is set twice",
         ),
         (
-            {"camera": {"noise_std": 0.0}, "noise_std": 0.02},
-            r"'sim\.camera\.noise_std' is set twice",
+            {"sensors": {"camera_mode": "geometric"}, "camera_mode": "rendered"},
+            r"'sensors\.camera_mode'",
         ),
-        ({"sim": {"camera_mode": "geometric"}, "camera_mode": "rendered"}, r"'sim\.camera_mode'"),
-        ({"sim": EnvConfig().sim, "camera_mode": "geometric"}, r"'sim' is set both whole and by"),
-        ({"camera_mode": "geometric", "sim": EnvConfig().sim}, r"'sim' is set both whole and by"),
-        ({"noise_std": 0.0, "sim.camera": None}, r"'sim\.camera' is set both whole and by"),
-        ({"laser": LaserConfig(), "n_beams": 90}, r"'sim\.laser' is set both whole and by"),
-        ({"laser": None, "sim.laser.n_beams": 90}, r"'sim\.laser' is set both whole and by"),
+        (
+            {"sensors": RigConfig(), "camera_mode": "geometric"},
+            r"'sensors' is set both whole and by",
+        ),
+        (
+            {"sensors.camera.noise_std": 0.0, "sensors.camera": None},
+            r"'sensors\.camera' is set both whole and by",
+        ),
+        (
+            {"laser": LaserConfig(), "sensors.laser.n_beams": 90},
+            r"'sensors\.laser' is set both whole and by",
+        ),
+        ({"episode_s": 3.0, "task.episode_s": 6.0}, r"'task\.episode_s' is set twice"),
     ],
 )
 def test_a_field_set_twice_raises(overrides: dict[str, Any], match: str) -> None:
     with pytest.raises(TypeError, match=match):
-        with_overrides(EnvConfig(), **overrides)
+        av(**overrides)
+
+
+# --- validation --------------------------------------------------------------------------------
 
 
 @pytest.mark.parametrize(
-    "overrides, match",
+    ("overrides", "match"),
     [
         ({"episode_s": 0.15}, "whole number"),
+        ({"episode_s": 0.05}, "whole number"),  # less than one step
+        ({"episode_s": -1.0}, "episode_s"),
         ({"physics_dt_s": 0.2, "control_dt_s": 0.4}, "physics_dt_s"),
-        ({"n_beams": 0}, "n_beams"),
+        ({"control_dt_s": 2.0}, "control_dt_s <= 1 s"),
+        ({"physics_dt_s": 0.03}, "whole multiple of physics_dt_s"),
+        ({"scene.poles_enabled": False}, "poles_enabled"),
+        ({"scene.poles.offset_outside_m": 0.69}, "border strip"),
+        ({"info_level": "heavy"}, "info_level must be one of"),
+        ({"sensors.laser.n_beams": 0}, "n_beams"),
+        ({"n_other_robots": 10}, "n_other_robots"),
+        ({"body_behaviour": "dance"}, "body_behaviour must be one of"),
+        ({"square_side_m": 6.0}, "square_side_m"),
+        ({"camera_mode": "magic"}, "camera_mode must be one of"),
     ],
 )
 def test_bad_values_raise_value_errors(overrides: dict[str, Any], match: str) -> None:
     with pytest.raises(ValueError, match=match):
-        with_overrides(EnvConfig(), **overrides)
+        av(**overrides)
+
+
+def test_env_config_validates_when_built_directly() -> None:
+    with pytest.raises(ValueError, match="whole number"):
+        EnvConfig(task=TaskConfig(episode_s=0.15))
+    with pytest.raises(ValueError, match="whole multiple"):
+        EnvConfig(control_dt_s=0.1, physics_dt_s=0.03)
+    with pytest.raises(ValueError, match=r"needs sensors\.camera_mode='rendered'"):
+        EnvConfig(sensors=RigConfig(camera_mode="geometric"))
+    with pytest.raises(ValueError, match="poles_enabled must be True"):
+        EnvConfig(scene=SceneConfig(poles_enabled=False))
+    with pytest.raises(ValueError, match="info_level"):
+        EnvConfig(info_level="none")
+    with pytest.raises(ValueError, match="whole number"):
+        ActiveVisionConfig(task=ActiveVisionTaskConfig(episode_s=0.25))
+    geometric = EnvConfig(
+        sensors=RigConfig(camera_mode="geometric"),
+        perception=PipelineConfig(pole_sightings="colour"),
+        task=TaskConfig(episode_s=3.0),
+        info_level="light",
+        info_timing=True,
+    )
+    assert geometric.max_steps == 30 and geometric.substeps == 10
+
+
+def test_defaults_and_task_configs_per_env() -> None:
+    assert type(ActiveVisionConfig().task) is ActiveVisionTaskConfig
+    assert type(LookAroundConfig().task) is HeadControlTaskConfig
+    default = EnvConfig()
+    assert (default.control_dt_s, default.physics_dt_s) == (0.1, 0.01)
+    assert (default.info_level, default.info_timing) == ("full", False)
+    assert default.max_steps == 600 and default.sensors.camera_mode == "rendered"
 
 
 def test_front_and_back_end_are_selected_by_name() -> None:
-    config = with_overrides(
-        EnvConfig(), frontend="cnn", backend="fej", min_views=5, gate="mahalanobis"
-    )
-    assert config.perception.frontend == "cnn"
+    config = av(frontend="cnn", backend="fej", min_views=5, gate="mahalanobis")
+    assert config.perception.pole_sightings == "cnn"
     slam = config.perception.slam
     assert (slam.backend, slam.resolved_min_views, slam.resolved_gate) == ("fej", 5, "mahalanobis")
-    gated = with_overrides(EnvConfig(), backend="gated").perception.slam
+    gated = av(backend="gated").perception.slam
     assert (gated.resolved_gate, gated.resolved_min_views) == ("thresholds", 1)
+    assert av(frontend="colour").perception.pole_sightings == "colour"
+    assert av(frontend="oracle", self_pose="oracle").perception.self_pose == "oracle"
 
 
-def test_default_perception_and_cnn_settings_by_name() -> None:
-    default = EnvConfig().perception
-    assert (default.frontend, default.slam.backend, default.cnn.score_threshold) == (
-        "cnn",
-        "gated",
-        0.6,
-    )
+def test_default_perception_and_cnn_settings_by_path() -> None:
+    default = ActiveVisionConfig().perception
+    assert (default.pole_sightings, default.self_pose) == ("cnn", "ekf_slam")
+    assert (default.slam.backend, default.cnn.score_threshold) == ("gated", 0.6)
     assert default.cnn.require_both_colours
-    cnn = with_overrides(EnvConfig(), score_threshold=0.5, edges=None, check_colours=False)
+    cnn = av(
+        score_threshold=0.5,
+        **{"perception.cnn.edges": None, "perception.cnn.check_colours": False},
+    )
     assert cnn.perception.cnn.score_threshold == 0.5
     assert cnn.perception.cnn.edges is None and cnn.perception.cnn.check_colours is False
-    near = with_overrides(EnvConfig(), width_min_px=20).perception.cnn.edges
+    near = av(**{"perception.cnn.edges.width_min_px": 20}).perception.cnn.edges
     assert near is not None and near.width_min_px == 20.0
 
 
 @pytest.mark.parametrize(
     ("overrides", "message"),
     [
-        ({"frontend": "yolo"}, "frontend must be one of"),
+        ({"frontend": "yolo"}, "pole_sightings must be one of"),
+        ({"self_pose": "gps"}, "self_pose must be one of"),
         ({"backend": "ukf"}, "backend must be one of"),
-        ({"min_views": 0}, "min_views must be >= 1"),
-        ({"frontend": "cnn", "camera_mode": "geometric"}, "needs sim.camera_mode='rendered'"),
+        ({"min_views": 0}, r"min_views must be .*>= 1"),
+        ({"frontend": "cnn", "camera_mode": "geometric"}, r"needs sensors\.camera_mode='rendered'"),
+        ({"camera_mode": "geometric"}, "frontend='colour'"),  # the default front end is the CNN
     ],
 )
 def test_bad_front_or_back_end_is_refused(overrides: dict[str, Any], message: str) -> None:
     with pytest.raises(ValueError, match=message):
-        with_overrides(EnvConfig(), **overrides)
+        av(**overrides)
+
+
+# --- the envs' keyword arguments ---------------------------------------------------------------
+
+
+def test_a_bare_nested_name_to_gym_make_is_refused_with_a_hint() -> None:
+    with pytest.raises(TypeError, match=r"'noise_std'.*did you mean.*'sensors\.camera\.noise_std'"):
+        gym.make("SPL/ActiveVision-v0", noise_std=0)
+    with pytest.raises(TypeError, match="unknown config key 'body_behaviour'"):
+        gym.make("SPL/LookAround-v0", body_behaviour="square")
+
+
+def test_gym_make_takes_dotted_paths_top_level_names_and_aliases() -> None:
+    env = gym.make(
+        "SPL/ActiveVision-v0",
+        frontend="colour",
+        episode_s=3.0,
+        body_behaviour="square",
+        info_level="light",
+        **{"sensors.camera.noise_std": 0.0},
+    )
+    config = env.unwrapped.config
+    assert isinstance(config, ActiveVisionConfig)
+    assert config.perception.pole_sightings == "colour"
+    assert config.sensors.camera.noise_std == 0.0
+    assert config.task.episode_s == 3.0 and config.task.body_behaviour == "square"
+    assert config.info_level == "light"
+    env.close()
+
+
+def test_gym_make_takes_a_whole_config_and_refuses_another_envs() -> None:
+    config = LookAroundConfig(
+        perception=PipelineConfig(pole_sightings="colour"),
+        task=HeadControlTaskConfig(episode_s=3.0),
+    )
+    env = gym.make("SPL/LookAround-v0", config=config, n_other_robots=1)
+    assert env.unwrapped.config == dataclasses.replace(
+        config, task=HeadControlTaskConfig(episode_s=3.0, n_other_robots=1)
+    )
+    env.close()
+    with pytest.raises(TypeError, match="config must be a LookAroundConfig"):
+        gym.make("SPL/LookAround-v0", config=ActiveVisionConfig())

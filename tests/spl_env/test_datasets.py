@@ -13,7 +13,7 @@ import pytest
 from perception.geometry import project_points, range_bearing
 from perception.types import CameraModel
 from spl_env.datasets import DatasetConfig, generate
-from spl_env.sim.scene import SceneConfig
+from spl_env.scenes.spl_field import SceneConfig
 
 SCENE = SceneConfig()
 CAMERA = CameraModel()

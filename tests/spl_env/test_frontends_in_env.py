@@ -8,6 +8,7 @@ import pytest
 
 import spl_env  # noqa: F401  (registers the env ids)
 from perception.metrics import landmark_range_bearing
+from perception.representations import POLE_SIGHTINGS
 
 
 @pytest.mark.parametrize("frontend", ["colour", "cnn"])
@@ -20,7 +21,14 @@ def test_front_end_sightings_in_the_env_match_the_truth(frontend: str) -> None:
         _, _, _, _, info = env.step(np.array([yaw, 0.0], dtype=np.float32))
         gt = info["ground_truth"]
         truth = landmark_range_bearing(gt["robot_pose"], gt["landmark_ids"], gt["landmarks"])
-        for landmark_id, range_m, bearing in info["perception"]["detections"]:
+        per = info["perception"]
+        assert per["sightings"].shape == (6, 2) and per["sighted"].shape == (6,)
+        assert np.all(per["sightings"][~per["sighted"]] == 0.0)  # unseen rows are zero
+        sightings = env.unwrapped.perception_output[POLE_SIGHTINGS]
+        assert per["landmark_ids"][per["sighted"]].tolist() == [s.landmark_id for s in sightings]
+        for row in np.flatnonzero(per["sighted"]):
+            landmark_id = int(per["landmark_ids"][row])
+            range_m, bearing = per["sightings"][row]
             true_range, true_bearing = truth[landmark_id]
             if true_range < 5.0:  # the detectors' stated working range
                 near += 1

@@ -11,74 +11,120 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
+import spl_env  # noqa: F401  (registers the env ids)
 from perception.metrics import landmark_range_bearing
+from perception.representations import POLE_SIGHTINGS
 from perception.vision import ColourFilterConfig, ColourPoleDetector
+from spl_env.envs.active_vision import ActiveVisionEnv
 from spl_env.sensors.camera import EpisodeLighting
-from spl_env.sensors.geometric_camera import GeometricCameraConfig
-from spl_env.simulation import SimConfig, SplSimulation
+from spl_env.sensors.emulation.poles import (
+    GeometricCameraConfig,
+    GeometricPoleCamera,
+    GeometricPoleSightings,
+)
+
+GEOMETRIC = {"camera_mode": "geometric", "frontend": "colour", "episode_s": 3.0}
 
 
 @pytest.fixture(scope="module")
-def sim() -> Iterator[SplSimulation]:
-    s = SplSimulation(SimConfig(n_other_robots=1))
-    s.reset(np.random.default_rng(0), np.zeros(3))
-    yield s
-    s.close()
+def sim() -> Iterator[ActiveVisionEnv]:
+    env = ActiveVisionEnv(n_other_robots=1, **GEOMETRIC)
+    env.reset(seed=0)
+    yield env
+    env.close()
 
 
-def _look(sim: SplSimulation, pose: tuple[float, float, float], head_yaw: float = 0.0) -> None:
-    sim.robot.place(np.array(pose), head=np.array([head_yaw, 0.0]))
+def _emulator(sim: ActiveVisionEnv) -> GeometricPoleSightings:
+    emulator = sim.rig.emulators[POLE_SIGHTINGS]
+    assert isinstance(emulator, GeometricPoleSightings)
+    return emulator
 
 
-def _detector(sim: SplSimulation) -> ColourPoleDetector:
+def _camera(sim: ActiveVisionEnv) -> GeometricPoleCamera:
+    return _emulator(sim).camera
+
+
+def _look(sim: ActiveVisionEnv, pose: tuple[float, float, float], head_yaw: float = 0.0) -> None:
+    sim.robots[0].place(np.array(pose), head=np.array([head_yaw, 0.0]))
+
+
+def _detector(sim: ActiveVisionEnv) -> ColourPoleDetector:
     scene = sim.config.scene
     return ColourPoleDetector(
-        ColourFilterConfig(), sim.config.camera.model, sim.pole_codes, scene.poles.geometry
+        ColourFilterConfig(), sim.config.sensors.camera.model, sim.scene.codes, scene.poles.geometry
     )
 
 
-def test_band_centres_agree_with_rendered_detection(sim: SplSimulation) -> None:
-    sim.others[0].place(np.array([4.0, -2.5, 0.0]))  # out of the way
+def test_band_centres_agree_with_rendered_detection(sim: ActiveVisionEnv) -> None:
+    sim.robots[1].place(np.array([4.0, -2.5, 0.0]))  # out of the way
+    robot, camera = sim.robots[0], _camera(sim)
     detector = _detector(sim)
-    pole = sim.landmarks[1]  # id 1 at (0, 3.35)
+    pole = sim.scene.landmarks[1]  # id 1 at (0, 3.35)
+    assert sim.scene.landmark_ids[1] == 1
     for distance in (1.5, 2.5, 3.5):
         _look(sim, (pole[0], pole[1] - distance, math.pi / 2))
-        position, rotation = sim.robot.camera_pose_world()
-        seen = {
-            b.landmark_id: b for b in sim.geometric_camera.visible(sim.world, position, rotation)
-        }
-        image, _ = sim.camera.render(
+        position, rotation = robot.camera_pose_world()
+        seen = {b.landmark_id: b for b in camera.visible(sim.world, position, rotation)}
+        image, _ = sim.rig.camera.render(
             sim.world, position, rotation, EpisodeLighting.default(), np.random.default_rng(0)
         )
-        found = {o.landmark_id: o for o in detector.detect(image, sim.robot.camera_state())}
+        found = {o.landmark_id: o for o in detector.detect(image, robot.camera_state())}
         assert 1 in seen and 1 in found
         # the detector's reported pixel is the midpoint of its two band centres
         midpoint = (seen[1].upper + seen[1].lower) / 2
         np.testing.assert_allclose(found[1].pixel, midpoint, atol=1.5)
         # and through the shared measurement model the ideal centres give the placed distance
         obs = detector.observe_band_centres(
-            1, seen[1].upper, seen[1].lower, seen[1].box, sim.robot.camera_state()
+            1, seen[1].upper, seen[1].lower, seen[1].box, robot.camera_state()
         )
         assert obs is not None
-        true_range = float(np.hypot(*(pole - sim.robot.pose[:2])))
+        true_range = float(np.hypot(*(pole - robot.pose[:2])))
         assert obs.range_m == pytest.approx(true_range, rel=0.01)
 
 
-def test_occluded_and_out_of_view_poles_are_not_seen(sim: SplSimulation) -> None:
-    pole = sim.landmarks[1]
+def test_occluded_and_out_of_view_poles_are_not_seen(sim: ActiveVisionEnv) -> None:
+    camera, robot, other = _camera(sim), sim.robots[0], sim.robots[1]
+    pole = sim.scene.landmarks[1]
     _look(sim, (pole[0], pole[1] - 3.0, math.pi / 2))
-    sim.others[0].place(np.array([4.0, -2.5, 0.0]))
-    position, rotation = sim.robot.camera_pose_world()
-    assert 1 in [b.landmark_id for b in sim.geometric_camera.visible(sim.world, position, rotation)]
-    sim.others[0].place(np.array([pole[0], pole[1] - 2.4, 0.0]))  # its head blocks the view
-    position, rotation = sim.robot.camera_pose_world()
-    assert 1 not in [
-        b.landmark_id for b in sim.geometric_camera.visible(sim.world, position, rotation)
-    ]
-    sim.others[0].place(np.array([4.0, -2.5, 0.0]))
+    other.place(np.array([4.0, -2.5, 0.0]))
+    position, rotation = robot.camera_pose_world()
+    assert 1 in [b.landmark_id for b in camera.visible(sim.world, position, rotation)]
+    other.place(np.array([pole[0], pole[1] - 2.4, 0.0]))  # its head blocks the view
+    position, rotation = robot.camera_pose_world()
+    assert 1 not in [b.landmark_id for b in camera.visible(sim.world, position, rotation)]
+    other.place(np.array([4.0, -2.5, 0.0]))
     _look(sim, (0.0, 0.0, 0.0))  # facing the goal: the nearest poles are 48° off the axis
-    position, rotation = sim.robot.camera_pose_world()
-    assert sim.geometric_camera.visible(sim.world, position, rotation) == []
+    position, rotation = robot.camera_pose_world()
+    assert camera.visible(sim.world, position, rotation) == []
+
+
+def test_emulated_sightings_are_the_colour_filter_model_of_the_band_centres(
+    sim: ActiveVisionEnv,
+) -> None:
+    sim.robots[1].place(np.array([4.0, -2.5, 0.0]))
+    robot, emulator = sim.robots[0], _emulator(sim)
+    pole = sim.scene.landmarks[1]
+    _look(sim, (pole[0] + 0.3, pole[1] - 2.0, math.pi / 2))
+    state = robot.camera_state()
+    sightings = emulator.observe(sim.world, robot, state, np.random.default_rng(1), 0.0)
+    [one] = [s for s in sightings if s.landmark_id == 1]
+    # the same draws through the camera, measured by the detector's model
+    position, rotation = robot.camera_pose_world()
+    [bands] = [
+        b
+        for b in emulator.camera.observe(sim.world, position, rotation, np.random.default_rng(1))
+        if b.landmark_id == 1
+    ]
+    expected = emulator.detector.observe_band_centres(1, bands.upper, bands.lower, bands.box, state)
+    assert expected is not None
+    assert (one.range_m, one.bearing_rad) == (expected.range_m, expected.bearing_rad)
+    true_range, true_bearing = landmark_range_bearing(
+        robot.pose, sim.scene.landmark_ids, sim.scene.landmarks
+    )[1]
+    assert one.range_m == pytest.approx(true_range, rel=0.05)
+    assert one.bearing_rad == pytest.approx(true_bearing, abs=0.02)
+    ids = [s.landmark_id for s in sightings]
+    assert ids == sorted(set(ids))  # at most one per pole, in id order
 
 
 def test_recall_is_piecewise_by_smear() -> None:
@@ -94,17 +140,15 @@ def test_recall_is_piecewise_by_smear() -> None:
         GeometricCameraConfig(pixel_std_u_px=-1.0)
 
 
-def test_observe_thins_and_disturbs_with_the_configured_statistics(sim: SplSimulation) -> None:
+def test_observe_thins_and_disturbs_with_the_configured_statistics(sim: ActiveVisionEnv) -> None:
     from scipy import stats
 
-    sim.others[0].place(np.array([4.0, -2.5, 0.0]))
-    pole = sim.landmarks[1]
+    sim.robots[1].place(np.array([4.0, -2.5, 0.0]))
+    pole = sim.scene.landmarks[1]
     _look(sim, (pole[0], pole[1] - 2.0, math.pi / 2))
-    position, rotation = sim.robot.camera_pose_world()
-    [truth] = [
-        b for b in sim.geometric_camera.visible(sim.world, position, rotation) if b.landmark_id == 1
-    ]
-    camera = sim.geometric_camera
+    position, rotation = sim.robots[0].camera_pose_world()
+    camera = _camera(sim)
+    [truth] = [b for b in camera.visible(sim.world, position, rotation) if b.landmark_id == 1]
     config = GeometricCameraConfig(
         recall_by_smear=((1.0, 0.5),), pixel_std_u_px=0.8, pixel_std_v_px=0.3
     )
@@ -163,9 +207,17 @@ def test_geometric_env_passes_checker_and_is_deterministic() -> None:
     checked = 0
     for _ in range(30):
         *_, info = env.step(np.zeros(2, dtype=np.float32))
-        gt = info["ground_truth"]
+        core = env.unwrapped
+        frame = core.sensor_frame
+        # nothing is rendered: the emulator's sightings are what perception reports
+        assert frame.image is None
+        assert core.perception_output[POLE_SIGHTINGS] is frame.emulated[POLE_SIGHTINGS]
+        gt, per = info["ground_truth"], info["perception"]
         truth = landmark_range_bearing(gt["robot_pose"], gt["landmark_ids"], gt["landmarks"])
-        for landmark_id, range_m, _ in info["perception"]["detections"]:
+        ids = [int(i) for i in per["landmark_ids"][per["sighted"]]]
+        assert ids == [s.landmark_id for s in frame.emulated[POLE_SIGHTINGS]]
+        assert np.all(per["sightings"][~per["sighted"]] == 0.0)
+        for landmark_id, (range_m, _) in zip(ids, per["sightings"][per["sighted"]], strict=True):
             assert range_m == pytest.approx(truth[landmark_id][0], rel=0.05)
             checked += 1
     assert checked > 0

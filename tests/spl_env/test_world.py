@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from perception.geometry import project_points
+from spl_env.robots.nao import NaoRobot, RobotConfig
+from spl_env.scenes.spl_field import SceneBodies, SceneConfig, SplFieldScene, build_scene
 from spl_env.sensors.camera import Camera, CameraConfig, EpisodeLighting
-from spl_env.sim.robot import NaoRobot, RobotConfig
-from spl_env.sim.scene import SceneBodies, SceneConfig, build_scene
 from spl_env.sim.world import MAX_PARTS_PER_BODY, BulletWorld, VisualPart
 
 SCENE = SceneConfig()
@@ -158,3 +158,28 @@ def test_camera_pose_matches_pybullet_head_link_while_swaying(scene) -> None:
         position, link_pos + link_rot @ robot.config.camera_offset_m, atol=1e-6
     )
     np.testing.assert_allclose(rotation, link_rot @ rot_y(robot.config.camera_tilt_rad), atol=1e-6)
+
+
+def test_field_scene_answers_what_is_where() -> None:
+    world = BulletWorld(time_step_s=0.01)
+    scene = SplFieldScene(world, SCENE)
+    codes = SCENE.poles.codes()
+    assert scene.codes == codes and scene.dimensions == SCENE.dimensions
+    np.testing.assert_array_equal(scene.landmark_ids, [c.landmark_id for c in codes])
+    positions = SCENE.poles.positions(SCENE.dimensions)
+    np.testing.assert_array_equal(scene.landmarks, positions[scene.landmark_ids])
+    # the pole bodies in landmark order stand where the landmarks are
+    for landmark_id, body_id, xy in zip(
+        scene.landmark_ids, scene.pole_body_ids(), scene.landmarks, strict=True
+    ):
+        assert body_id == world.body(scene.bodies.poles[int(landmark_id)])
+        np.testing.assert_allclose(world.position(scene.bodies.poles[int(landmark_id)])[:2], xy)
+    scene.place_ball(np.array([1.0, -0.5]), np.array([0.3, 0.2]))
+    ball, velocity = scene.ball_state()
+    np.testing.assert_allclose(ball, [1.0, -0.5], atol=1e-9)
+    np.testing.assert_allclose(velocity, [0.3, 0.2], atol=1e-9)
+    scene.place_ball(np.array([-2.0, 1.0]))  # placed without a velocity: at rest
+    ball, velocity = scene.ball_state()
+    np.testing.assert_allclose(ball, [-2.0, 1.0], atol=1e-9)
+    np.testing.assert_allclose(velocity, [0.0, 0.0], atol=1e-12)
+    world.close()

@@ -1,4 +1,4 @@
-"""The fast "geometric" camera mode: where the poles' colour bands fall in the image, no pixels.
+"""The fast "geometric" camera mode's pole sightings: where the poles' bands fall, no pixels.
 
 Instead of rendering a frame and segmenting it, each pole's two band centres are projected
 through the true camera pose (gait sway included, which the robot does not sense), kept if the
@@ -6,9 +6,9 @@ whole pole outline lies inside the image and no other body blocks the line of si
 and disturbed as the rendered pipeline is: a detection is missed with a chance that grows with
 the motion blur across the pole, and each centre gets Gaussian pixel noise, separately along
 columns and rows. The ids are those of the true poles: this mode makes no false detections.
-Perception then measures range and bearing with the colour filter's own model
-(:meth:`perception.vision.ColourPoleDetector.observe_band_centres`), so both modes produce the
-same detection types.
+Range and bearing are then measured with the colour filter's own model
+(:meth:`perception.vision.ColourPoleDetector.observe_band_centres`), so the emulator delivers
+the ``pole_sightings`` representation of the same type as the rendered front ends.
 
 ``recall_by_smear`` and the pixel noise are fitted to the rendered pipeline by
 ``benchmarks/fit_geometric_camera.py``, which writes ``benchmarks/results/geometric_camera.json``.
@@ -22,13 +22,30 @@ from dataclasses import dataclass
 import numpy as np
 
 from perception.geometry import FloatArray, project_points
-from perception.types import BandCentres, CameraModel, PoleGeometry
+from perception.representations import POLE_SIGHTINGS
+from perception.types import CameraModel, CameraState, LandmarkObservation, PoleGeometry
+from perception.vision.colour_filter import ColourPoleDetector
+from spl_env.robots.nao import NaoRobot
 from spl_env.sim.world import BulletWorld
 
 # The band centroid of a lit cylinder sits pi/4 radius in front of its axis, as the detector
 # assumes when it steps back to the axis.
 CENTROID_DEPTH_FACTOR = 0.25 * math.pi
 WHITE_BASE_SEEN_M = 0.05  # the detector checks this much of the white base below the bands
+
+
+@dataclass(frozen=True, kw_only=True)
+class BandCentres:
+    """Where a pole's two colour bands appear in the image.
+
+    ``upper`` and ``lower`` are (2,) ``(u, v)`` band centres (px); ``box`` is (4,)
+    ``(u0, v0, u1, v1)``.
+    """
+
+    landmark_id: int
+    upper: FloatArray
+    lower: FloatArray
+    box: FloatArray
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -190,3 +207,31 @@ class GeometricPoleCamera:
             for b, k, n in zip(seen, keep, noise, strict=True)
             if k
         )
+
+
+class GeometricPoleSightings:
+    """Emulates the colour front end's ``pole_sightings``: the band centres of
+    :class:`GeometricPoleCamera` measured with ``detector``'s model (range from the two band
+    elevations, bearing from the column and the head angles)."""
+
+    provides = POLE_SIGHTINGS
+
+    def __init__(self, camera: GeometricPoleCamera, detector: ColourPoleDetector) -> None:
+        self.camera = camera
+        self.detector = detector
+
+    def observe(
+        self,
+        world: BulletWorld,
+        robot: NaoRobot,
+        camera_state: CameraState,
+        rng: np.random.Generator,
+        blur_px: float,
+    ) -> tuple[LandmarkObservation, ...]:
+        """This frame's pole sightings (robot frame), at most one per pole, in id order."""
+        position, rotation = robot.camera_pose_world()
+        found = (
+            self.detector.observe_band_centres(b.landmark_id, b.upper, b.lower, b.box, camera_state)
+            for b in self.camera.observe(world, position, rotation, rng, blur_px=blur_px)
+        )
+        return tuple(obs for obs in found if obs is not None)

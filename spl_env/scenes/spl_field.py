@@ -1,7 +1,9 @@
-"""Builds the SPL scene in a :class:`BulletWorld` from primitive shapes.
+"""The SPL field scene: the static world built from primitive shapes, and its ground truth.
 
 Carpet with painted lines (one compound body), two goals, the six landmark poles of seed 000,
 a ball, and boards with textured posters around the field for realistic clutter.
+:class:`SplFieldScene` builds it once per env and answers what is where: the poles (landmark
+ids and positions), the obstacles robots walk around, the ball's body.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from importlib import resources
 
 import numpy as np
 
+from perception.geometry import FloatArray
 from perception.types import PoleCode, PoleGeometry
 from spl_env.field import FieldDimensions, PoleLayout
 from spl_env.sim.world import MAX_PARTS_PER_BODY, BulletWorld, VisualPart
@@ -46,6 +49,7 @@ class SceneConfig:
     board_panel_width_m: float = 2.0  # each panel carries one poster
     ball_mass_kg: float = 0.044  # SPL ball mass
     ball_rolling_friction: float = 0.0015
+    scene_seed: int = 0  # picks the posters when the world is built
 
     def __post_init__(self) -> None:
         for name in ("board_distance_m", "board_height_m", "board_panel_width_m", "ball_mass_kg"):
@@ -64,6 +68,8 @@ class SceneConfig:
                 f"SceneConfig.poles.x_positions_m must lie on the carpet (|x| + radius <= "
                 f"{carpet_l / 2} m), got {self.poles.x_positions_m}"
             )
+        if not isinstance(self.scene_seed, int) or self.scene_seed < 0:
+            raise ValueError(f"SceneConfig.scene_seed must be an int >= 0, got {self.scene_seed!r}")
         if not (0.0 <= self.ball_rolling_friction < 1.0):
             raise ValueError(
                 "SceneConfig.ball_rolling_friction must be in [0, 1), "
@@ -259,3 +265,51 @@ def _add_boards(world: BulletWorld, config: SceneConfig, rng: np.random.Generato
             poster = POSTER_FILES[int(rng.integers(len(POSTER_FILES)))]
             world.set_texture(name, str(poster_dir / poster))
             panel += 1
+
+
+class SplFieldScene:
+    """The SPL field in ``world``, built once from ``config`` (posters drawn from
+    ``config.scene_seed``), with its ground truth.
+
+    ``codes`` (L,) are the poles' colour codes, ``landmark_ids`` (L,) and ``landmarks`` (L, 2)
+    their ids and field positions (m); ``obstacles`` (K, 3) the goal posts and poles as
+    ``(x, y, radius)`` circles (m) that robots walk around; ``bodies`` names the bodies.
+    """
+
+    def __init__(self, world: BulletWorld, config: SceneConfig) -> None:
+        self.config = config
+        self.world = world
+        self.bodies = build_scene(world, config, np.random.default_rng(config.scene_seed))
+        self.codes: tuple[PoleCode, ...] = config.poles.codes() if config.poles_enabled else ()
+        positions = config.poles.positions(config.dimensions)
+        self.landmark_ids = np.array([c.landmark_id for c in self.codes], dtype=np.int64)
+        self.landmarks = positions[self.landmark_ids] if self.codes else np.zeros((0, 2))
+        dims, pole_radius = config.dimensions, config.poles.geometry.radius_m
+        post_radius = dims.goal_post_diameter_m / 2
+        self.obstacles = np.array(
+            [(*world.position(n)[:2], post_radius) for n in self.bodies.goal_posts]
+            + [(*world.position(n)[:2], pole_radius) for n in self.bodies.poles.values()]
+        ).reshape(-1, 3)
+
+    @property
+    def dimensions(self) -> FieldDimensions:
+        """The field's dimensions."""
+        return self.config.dimensions
+
+    def pole_body_ids(self) -> tuple[int, ...]:
+        """PyBullet body ids (L,) of the poles, in the order of ``landmark_ids``."""
+        return tuple(self.world.body(self.bodies.poles[int(i)]) for i in self.landmark_ids)
+
+    def place_ball(self, xy: FloatArray, velocity: FloatArray | None = None) -> None:
+        """Put the ball on the ground at ``xy`` (2,) (m) rolling at ``velocity`` (2,) (m/s)."""
+        radius = self.config.dimensions.ball_diameter_m / 2
+        self.world.set_pose(self.bodies.ball, (xy[0], xy[1], radius), 0.0)
+        vx, vy = (0.0, 0.0) if velocity is None else (float(velocity[0]), float(velocity[1]))
+        self.world.set_velocity(self.bodies.ball, (vx, vy, 0.0))
+
+    def ball_state(self) -> tuple[FloatArray, FloatArray]:
+        """The ball's position (2,) (m) and velocity (2,) (m/s), field frame."""
+        return (
+            self.world.position(self.bodies.ball)[:2],
+            self.world.velocity(self.bodies.ball)[:2],
+        )

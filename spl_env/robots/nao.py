@@ -1,4 +1,8 @@
-"""A Nao-sized robot made of primitive shapes, with an omnidirectional walk and a head.
+"""The Nao robot module: a Nao-sized body of primitive shapes, its command and its head mapping.
+
+:class:`NaoCommand` is what drives one control step (walk velocity, head target, kick);
+:func:`head_target` and :func:`head_action` are the one mapping between a head action in
+[-1, 1] and joint targets, used by tasks, observations and scripted policies alike.
 
 The walk is kinematic: the body follows the commanded velocity within Nao-like speed and
 acceleration limits, and sways with the gait (roll, pitch and bob), which moves the camera in a
@@ -9,7 +13,7 @@ joint limits and a speed limit. Frames: see :mod:`perception.geometry`.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -24,7 +28,7 @@ TEAM_WAISTBAND_RGBA = ((0.05, 0.10, 0.55, 1.0), (0.65, 0.05, 0.05, 1.0))
 
 @dataclass(frozen=True, kw_only=True)
 class RobotConfig:
-    """Nao v6 body numbers and walk/head limits."""
+    """Nao v6 body numbers, walk/head limits and the kick."""
 
     body_radius_m: float = 0.15  # plan-view radius used for collisions between robots
     max_speed: tuple[float, float, float] = (0.25, 0.15, 1.0)  # vx, vy (m/s), omega (rad/s)
@@ -41,6 +45,9 @@ class RobotConfig:
     sway_roll_rad: float = 0.035  # torso roll amplitude at full walking speed
     sway_pitch_rad: float = 0.012  # torso pitch amplitude at full walking speed
     sway_bob_m: float = 0.008  # vertical bob amplitude at full walking speed
+    kick_reach_m: float = 0.25  # a kick reaches a ball this far ahead of the robot centre
+    kick_half_width_m: float = 0.12  # ... and this far to either side
+    kick_speed_mps: float = 2.0  # ball speed a kick gives
 
     def __post_init__(self) -> None:
         for name in ("max_speed", "max_accel"):
@@ -53,6 +60,9 @@ class RobotConfig:
             "head_speed_rps",
             "head_yaw_joint_height_m",
             "gait_frequency_hz",
+            "kick_reach_m",
+            "kick_half_width_m",
+            "kick_speed_mps",
         ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
@@ -77,6 +87,43 @@ class RobotConfig:
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):
                 raise ValueError(f"RobotConfig.{name} must be finite and >= 0, got {value}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class NaoCommand:
+    """One control step's command to a Nao.
+
+    ``walk`` (3,): body-frame velocity ``(vx, vy, omega)`` (m/s, m/s, rad/s), limited by the
+    walk engine; ``head`` (2,): yaw and pitch targets (rad), or ``None`` to keep the head where
+    it is; ``kick``: kick the ball if it lies in the kick zone in front of the feet.
+    """
+
+    walk: FloatArray = field(default_factory=lambda: np.zeros(3))
+    head: FloatArray | None = None
+    kick: bool = False
+
+
+def head_target(config: RobotConfig, action: FloatArray) -> FloatArray:
+    """Head joint targets (2,) (rad) of a head action (2,) in [-1, 1].
+
+    Yaw is ``a[0] * head_yaw_limit_rad``; pitch runs linearly from ``head_pitch_min_rad``
+    (``a[1] = -1``, up) to ``head_pitch_max_rad`` (``a[1] = 1``, down).
+    """
+    a = np.asarray(action, dtype=np.float64)
+    yaw = a[0] * config.head_yaw_limit_rad
+    pitch = config.head_pitch_min_rad + (a[1] + 1.0) / 2.0 * (
+        config.head_pitch_max_rad - config.head_pitch_min_rad
+    )
+    return np.array([yaw, pitch])
+
+
+def head_action(config: RobotConfig, yaw_rad: float, pitch_rad: float) -> FloatArray:
+    """The head action (2,) whose target is ``(yaw_rad, pitch_rad)``: :func:`head_target`'s
+    inverse, not clipped (angles beyond the joint limits map beyond [-1, 1]); also how the
+    observations encode the head's joint angles."""
+    pitch_mid = (config.head_pitch_max_rad + config.head_pitch_min_rad) / 2
+    pitch_half = (config.head_pitch_max_rad - config.head_pitch_min_rad) / 2
+    return np.array([yaw_rad / config.head_yaw_limit_rad, (pitch_rad - pitch_mid) / pitch_half])
 
 
 def _body_parts(team: int) -> list[VisualPart]:
@@ -177,6 +224,17 @@ class NaoRobot:
             self.velocity = np.zeros(3)
         else:
             self.pose = compose(self.pose, increment)
+
+    def kick_velocity(self, ball_xy: FloatArray) -> FloatArray | None:
+        """Ball velocity (2,) (m/s, field frame) of a kick now, or None when the ball (2,) is
+        outside the kick zone (``kick_reach_m`` ahead, ``kick_half_width_m`` to either side)."""
+        cfg = self.config
+        c, s = math.cos(self.pose[2]), math.sin(self.pose[2])
+        dx, dy = ball_xy[0] - self.pose[0], ball_xy[1] - self.pose[1]
+        ahead, aside = c * dx + s * dy, -s * dx + c * dy
+        if not (0.0 < ahead <= cfg.kick_reach_m and abs(aside) <= cfg.kick_half_width_m):
+            return None
+        return cfg.kick_speed_mps * np.array([c, s])
 
     def move_head(self, target: FloatArray, dt_s: float) -> None:
         """Turn the head towards ``target`` (yaw, pitch) rad within joint and speed limits."""

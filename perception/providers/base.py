@@ -1,0 +1,55 @@
+"""The provider interface and what every provider may be built from."""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any, ClassVar
+
+from perception.representations import Prior
+from perception.types import CameraModel, PoleCode, PoleGeometry
+
+if TYPE_CHECKING:
+    from perception.vision.cnn_detector import CnnDetectorConfig, CnnPoleDetector
+
+
+class Provider(ABC):
+    """Computes one representation per frame.
+
+    ``provides`` names the representation; ``requires`` the sensor inputs (fields of
+    :class:`perception.types.SensorFrame`) and representations :meth:`update` reads.
+    """
+
+    provides: ClassVar[str]
+    requires: ClassVar[tuple[str, ...]]
+
+    def reset(self, prior: Prior) -> None:  # noqa: B027  (stateless providers keep nothing)
+        """Start an episode from ``prior``; stateless providers need not override this."""
+
+    @abstractmethod
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> Any:
+        """This frame's representation from ``inputs`` (one entry per name in ``requires``)
+        at time ``time_s`` (s)."""
+
+
+class PerceptionContext:
+    """What providers are built from: the robot's camera and the scene's known landmarks.
+
+    ``camera`` is the camera's intrinsics; ``codes`` (L,) the pole colour codes with their
+    landmark ids; ``pole`` the pole geometry. Expensive shared parts (the CNN) are built once
+    per context and shared by every provider that reads them (:meth:`cnn_detector`).
+    """
+
+    def __init__(self, camera: CameraModel, codes: Sequence[PoleCode], pole: PoleGeometry) -> None:
+        self.camera = camera
+        self.codes = tuple(codes)
+        self.pole = pole
+        self._cnn: dict[CnnDetectorConfig, CnnPoleDetector] = {}
+
+    def cnn_detector(self, config: CnnDetectorConfig) -> CnnPoleDetector:
+        """The CNN detector for ``config``, loaded on first use and then shared."""
+        if config not in self._cnn:
+            from perception.vision.cnn_detector import CnnPoleDetector  # loads torch
+
+            self._cnn[config] = CnnPoleDetector(config, self.camera, self.codes, self.pole)
+        return self._cnn[config]

@@ -1,0 +1,119 @@
+"""Oracle providers: the ground truth plus configured noise, for ablations.
+
+They read :attr:`perception.types.SensorFrame.truth`, which an env fills only when one of them
+is configured; they are chosen by name (``"oracle"``), never by default. Every draw uses the
+episode's generator handed over in :class:`perception.representations.Prior`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from perception.geometry import range_bearing, wrap_angle
+from perception.providers.base import PerceptionContext, Provider
+from perception.representations import POLE_SIGHTINGS, SELF_POSE, Prior
+from perception.types import GroundTruth, LandmarkObservation, SlamEstimate
+from perception.validation import check_positive
+
+
+@dataclass(frozen=True, kw_only=True)
+class OracleConfig:
+    """Noise of the oracle providers (standard deviations, SI units)."""
+
+    range_std_m: float = 0.05  # pole sighting range noise
+    bearing_std_rad: float = 0.01  # pole sighting bearing noise
+    max_range_m: float = 8.0  # poles beyond are not sighted (as the colour filter's limit)
+    position_std_m: float = 0.05  # self pose x and y noise
+    heading_std_rad: float = 0.02  # self pose heading noise
+    landmark_std_m: float = 0.05  # noise of each mapped pole coordinate
+
+    def __post_init__(self) -> None:
+        for name in (
+            "range_std_m",
+            "bearing_std_rad",
+            "max_range_m",
+            "position_std_m",
+            "heading_std_rad",
+            "landmark_std_m",
+        ):
+            check_positive("OracleConfig", name, getattr(self, name))
+
+
+def _rng(prior: Prior | None) -> np.random.Generator:
+    if prior is None:
+        raise RuntimeError("an oracle provider must be reset() with the episode's prior first")
+    return prior.rng
+
+
+class OraclePoleSightings(Provider):
+    """Every pole within ``max_range_m`` whose bearing lies inside the camera's horizontal
+    field of view (from the head yaw), with Gaussian range and bearing noise; no occlusion."""
+
+    provides = POLE_SIGHTINGS
+    requires = ("truth", "camera_state")
+
+    def __init__(self, config: OracleConfig, context: PerceptionContext) -> None:
+        self.config = config
+        self.half_fov_rad = math.radians(context.camera.hfov_deg) / 2
+        self._prior: Prior | None = None
+
+    def reset(self, prior: Prior) -> None:
+        self._prior = prior
+
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> tuple[LandmarkObservation, ...]:
+        rng = _rng(self._prior)
+        truth: GroundTruth = inputs["truth"]
+        c = self.config
+        if len(truth.landmark_ids) == 0:
+            return ()
+        rb = range_bearing(truth.robot_pose, truth.landmarks)
+        off_axis = np.abs(wrap_angle(rb[:, 1] - inputs["camera_state"].head_yaw))
+        seen = np.flatnonzero((rb[:, 0] <= c.max_range_m) & (off_axis <= self.half_fov_rad))
+        noise = rng.normal(0.0, 1.0, size=(len(seen), 2)) * (c.range_std_m, c.bearing_std_rad)
+        cov = np.diag([c.range_std_m**2, c.bearing_std_rad**2])
+        sightings = [
+            LandmarkObservation(
+                landmark_id=int(truth.landmark_ids[k]),
+                range_m=max(float(rb[k, 0] + n[0]), 1e-3),
+                bearing_rad=float(wrap_angle(rb[k, 1] + n[1])),
+                cov=cov.copy(),
+            )
+            for k, n in zip(seen, noise, strict=True)
+        ]
+        return tuple(sorted(sightings, key=lambda s: s.landmark_id))
+
+
+class OracleSelfPose(Provider):
+    """The true pose and pole map with Gaussian noise and the matching diagonal covariances."""
+
+    provides = SELF_POSE
+    requires = ("truth",)
+
+    def __init__(self, config: OracleConfig) -> None:
+        self.config = config
+        self._prior: Prior | None = None
+
+    def reset(self, prior: Prior) -> None:
+        self._prior = prior
+
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> SlamEstimate:
+        rng = _rng(self._prior)
+        truth: GroundTruth = inputs["truth"]
+        c = self.config
+        pose_std = np.array([c.position_std_m, c.position_std_m, c.heading_std_rad])
+        pose = truth.robot_pose + rng.normal(0.0, 1.0, size=3) * pose_std
+        pose[2] = wrap_angle(pose[2])
+        n = len(truth.landmark_ids)
+        landmarks = truth.landmarks + rng.normal(0.0, c.landmark_std_m, size=(n, 2))
+        return SlamEstimate(
+            pose=pose,
+            pose_cov=np.diag(pose_std**2),
+            landmark_ids=np.asarray(truth.landmark_ids, dtype=np.int64).copy(),
+            landmarks=landmarks,
+            landmark_covs=np.repeat(np.eye(2)[None] * c.landmark_std_m**2, n, axis=0),
+        )

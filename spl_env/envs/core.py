@@ -1,0 +1,330 @@
+"""The one step loop of every SPL env: robots, scene and task joined (panda-gym's split).
+
+:class:`SplEnv` builds the world once per env: the scene (:mod:`spl_env.scenes`), our robot and
+the scripted ones (:mod:`spl_env.robots`), our robot's sensor rig (:mod:`spl_env.sensors.rig`),
+the perception pipeline (:mod:`perception.pipeline`, the CNN loaded once) and the task's
+observation encoders. Each control step:
+
+    action ─► task.command ─► head, walk (collisions), kick ─► physics ─► WorldState
+    rig.sense ─► SensorFrame ─► pipeline.step ─► PerceptionOutput ─► encoders ─► observation
+    task.reward_terms(WorldState, PerceptionOutput) ─► reward, info
+
+A new env is a task (:mod:`spl_env.tasks`) plus a subclass naming it and its config, and a
+registration; it adds no step loop of its own.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from numpy.typing import NDArray
+
+from perception.geometry import FloatArray, wrap_angle
+from perception.pipeline import PerceptionPipeline
+from perception.providers.base import PerceptionContext
+from perception.representations import POLE_SIGHTINGS, PerceptionOutput, Prior
+from perception.types import SensorFrame
+from perception.vision.colour_filter import ColourPoleDetector
+from spl_env.config import SPL_ALIASES, EnvConfig
+from spl_env.envs.info import FULL_INFO_REQUIRES, ground_truth_info, perception_info
+from spl_env.observations.base import EncoderInput, compose_space, encode_all
+from spl_env.overrides import apply_overrides
+from spl_env.rendering import TopDownView, draw_detections, side_by_side
+from spl_env.robots.nao import NaoCommand, NaoRobot
+from spl_env.scenes.spl_field import SplFieldScene
+from spl_env.sensors.emulation.poles import GeometricPoleCamera, GeometricPoleSightings
+from spl_env.sensors.rig import Emulator, NaoRig
+from spl_env.sim.placement import Placement
+from spl_env.sim.world import BulletWorld
+from spl_env.tasks.base import Task, TaskContext
+from spl_env.world_state import WorldState
+
+AGENT = 0  # index of our robot among the world's robots
+
+
+class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
+    """The env core; subclasses set :attr:`task_class`, :attr:`config_class` and
+    :attr:`aliases` and carry the env's documentation.
+
+    Keyword arguments override config fields by dotted path, top-level name or alias
+    (:func:`spl_env.overrides.apply_overrides`).
+    """
+
+    metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012
+    task_class: ClassVar[type[Task]]
+    config_class: ClassVar[type[EnvConfig]]
+    aliases: ClassVar[Mapping[str, str]] = SPL_ALIASES
+
+    def __init__(
+        self, config: EnvConfig | None = None, render_mode: str | None = None, **overrides: Any
+    ) -> None:
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"render_mode must be one of {self.metadata['render_modes']} or None, "
+                f"got {render_mode!r}"
+            )
+        if config is not None and not isinstance(config, self.config_class):
+            raise TypeError(
+                f"config must be a {self.config_class.__name__}, got {type(config).__name__}"
+            )
+        self.config = apply_overrides(config or self.config_class(), overrides, self.aliases)
+        self.render_mode = render_mode
+        cfg = self.config
+        self.metadata = {**self.metadata, "render_fps": round(1.0 / cfg.control_dt_s)}
+        self.world = BulletWorld(time_step_s=cfg.physics_dt_s)
+        self.scene = SplFieldScene(self.world, cfg.scene)
+        self.robots = [NaoRobot(self.world, "self", team=0, config=cfg.robot)] + [
+            NaoRobot(self.world, f"robot_{i}", team=(i + 1) % 2, config=cfg.robot)
+            for i in range(cfg.task.n_other_robots)
+        ]
+        self.placement = Placement(
+            self.scene.dimensions, self.scene.obstacles, cfg.robot.body_radius_m
+        )
+        self.task = self.task_class(
+            cfg.task,
+            TaskContext(
+                dimensions=self.scene.dimensions,
+                robot=cfg.robot,
+                control_dt_s=cfg.control_dt_s,
+                n_landmarks=len(self.scene.codes),
+            ),
+        )
+        self.encoders = self.task.encoders()
+        self.observation_space = compose_space(self.encoders)
+        self.action_space = self.task.action_space
+        emulators = self._emulators()
+        outputs = {name for encoder in self.encoders for name in encoder.requires}
+        outputs |= set(self.task.reward_requires())
+        if cfg.info_level == "full":
+            outputs |= set(FULL_INFO_REQUIRES)
+        self.pipeline = PerceptionPipeline(
+            cfg.perception,
+            PerceptionContext(cfg.sensors.camera.model, self.scene.codes, cfg.scene.poles.geometry),
+            outputs=sorted(outputs),
+            emulated=tuple(emulators),
+        )
+        self.rig = NaoRig(cfg.sensors, self.robots[AGENT], emulators)
+        self._render_image = cfg.sensors.camera_mode == "rendered" and (
+            "image" in self.pipeline.frame_inputs
+        )
+        self._top_down = TopDownView(self.scene.dimensions)
+        self._initial_state = self.world.save_state()
+        self._state: WorldState | None = None
+        self._frame: SensorFrame | None = None
+        self._output: PerceptionOutput | None = None
+        self._blocked = np.zeros(len(self.robots), dtype=bool)
+        self._time_s = 0.0
+        self._steps = 0
+        self._closed = False
+        self.step_times: dict[str, float] = {}  # wall-clock seconds of the last step's parts
+
+    def _emulators(self) -> dict[str, Emulator]:
+        """The geometric camera mode's emulators: pole sightings for the colour front end."""
+        cfg = self.config
+        if cfg.sensors.camera_mode != "geometric" or cfg.perception.pole_sightings != "colour":
+            return {}
+        scene, model = self.scene, cfg.sensors.camera.model
+        geometry = cfg.scene.poles.geometry
+        camera = GeometricPoleCamera(
+            cfg.sensors.geometric_camera,
+            model,
+            geometry,
+            scene.landmarks,
+            tuple(int(i) for i in scene.landmark_ids),
+            scene.pole_body_ids(),
+        )
+        detector = ColourPoleDetector(cfg.perception.colour_filter, model, scene.codes, geometry)
+        return {POLE_SIGHTINGS: GeometricPoleSightings(camera, detector)}
+
+    # ----- gymnasium API ------------------------------------------------------------------
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        super().reset(seed=seed)
+        rng = self.np_random
+        self.world.restore_state(self._initial_state)
+        self._time_s, self._steps = 0.0, 0
+        self._blocked[:] = False
+        start = self.task.start_pose(rng)
+        # the filter's start belief: the true start off by a draw from its own prior
+        prior = start + rng.normal(0.0, self.config.perception.slam.initial_pose_std)
+        ours, others = self.robots[AGENT], self.robots[AGENT + 1 :]
+        ours.place(start)
+        ball = self.task.place_scripted(rng, others, self.placement, [ours])
+        self.scene.place_ball(ball)
+        self.rig.reset(rng)
+        self.pipeline.reset(Prior(pose=prior, rng=rng))
+        self._state = self._world_state()
+        times = self._sense(np.zeros(3), yaw_rate_rps=0.0, physics_s=0.0)
+        return self._observation(), self._info(
+            self.task.reward_terms(*self._truth_and_belief()), times
+        )
+
+    def step(
+        self, action: np.ndarray
+    ) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, Any]]:
+        if self._state is None:
+            raise RuntimeError("call reset() before step()")
+        a = self._checked_action(action)
+        t0 = time.perf_counter()
+        state = self._state
+        commands = [self.task.command(a, state), *self.task.scripted_commands(state)]
+        ours = self.robots[AGENT]
+        yaw_before = ours.pose[2] + ours.head[0]
+        engine_delta = self._act(commands)
+        self.world.step(self.config.substeps)
+        self._time_s += self.config.control_dt_s
+        self._state = self._world_state()
+        yaw_rate = float(wrap_angle(ours.pose[2] + ours.head[0] - yaw_before))
+        yaw_rate /= self.config.control_dt_s
+        times = self._sense(engine_delta, yaw_rate, physics_s=time.perf_counter() - t0)
+        self._steps += 1
+        terms = self.task.reward_terms(*self._truth_and_belief())
+        terminated = self.task.terminated(*self._truth_and_belief())
+        truncated = self._steps >= self.config.max_steps
+        return (
+            self._observation(),
+            float(sum(terms.values())),
+            terminated,
+            truncated,
+            self._info(terms, times),
+        )
+
+    def render(self) -> NDArray[np.uint8] | None:
+        """``rgb_array``: (H, W, 3) uint8, the top-down field beside the camera image."""
+        if self.render_mode is None:
+            gym.logger.warn("render() called with render_mode=None; pass render_mode='rgb_array'")
+            return None
+        state, frame, output = self._current()
+        top = self._top_down.draw(state, output, self.scene.codes)
+        image = frame.image if frame.image is not None else self.rig.camera_view(self.world)
+        sightings = output.get(POLE_SIGHTINGS, ())
+        return side_by_side(top, draw_detections(image, sightings))
+
+    def close(self) -> None:
+        if not self._closed:
+            self.world.close()
+            self._closed = True
+
+    # ----- inspection ---------------------------------------------------------------------
+    @property
+    def sensor_frame(self) -> SensorFrame:
+        """What our robot's sensors delivered in the last step (for testing perception)."""
+        return self._current()[1]
+
+    @property
+    def perception_output(self) -> PerceptionOutput:
+        """What perception believed after the last step."""
+        return self._current()[2]
+
+    @property
+    def world_state(self) -> WorldState:
+        """The ground truth after the last step."""
+        return self._current()[0]
+
+    # ----- pieces -------------------------------------------------------------------------
+    def _checked_action(self, action: np.ndarray) -> FloatArray:
+        """``action`` as float64, or ValueError: wrong shape, not finite, outside the space."""
+        space = self.task.action_space
+        a = np.asarray(action, dtype=np.float64)
+        if a.shape != space.shape:
+            raise ValueError(f"action must have shape {space.shape}, got {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"action must be finite, got {a.tolist()}")
+        low, high = space.low, space.high
+        if np.any(a < low - 1e-6) or np.any(a > high + 1e-6):
+            raise ValueError(
+                f"action must lie in [{low.min():g}, {high.max():g}], got {a.tolist()}"
+            )
+        return a
+
+    def _act(self, commands: list[NaoCommand]) -> FloatArray:
+        """Apply each robot's command in order (head, walk with collisions, kick); returns our
+        walk engine's increment (3,)."""
+        dt = self.config.control_dt_s
+        engine_delta = np.zeros(3)
+        for k, (robot, command) in enumerate(zip(self.robots, commands, strict=True)):
+            if command.head is not None:
+                robot.move_head(command.head, dt)
+            others = [r for r in self.robots if r is not robot]
+            increment, self._blocked[k] = self.placement.walk(robot, command.walk, dt, others)
+            if k == AGENT:
+                engine_delta = increment
+            if command.kick:
+                ball, _ = self.scene.ball_state()
+                velocity = robot.kick_velocity(ball)
+                if velocity is not None:
+                    self.scene.place_ball(ball, velocity)
+        return engine_delta
+
+    def _sense(
+        self, engine_delta: FloatArray, yaw_rate_rps: float, physics_s: float
+    ) -> dict[str, float]:
+        """Our robot's frame and perception of it; returns the step's timings (s)."""
+        state = self._state
+        assert state is not None  # set by reset() and step() before sensing
+        truth = state.truth_for(AGENT) if "truth" in self.pipeline.frame_inputs else None
+        self._frame, sensed = self.rig.sense(
+            self.world,
+            self._time_s,
+            engine_delta,
+            yaw_rate_rps,
+            self.np_random,
+            render=self._render_image,
+            truth=truth,
+        )
+        t0 = time.perf_counter()
+        self._output = self.pipeline.step(self._frame)
+        self.step_times = {
+            "physics": physics_s,
+            "render": sensed.render,
+            "sensors": sensed.sensors,
+            "perception": time.perf_counter() - t0,
+        }
+        return self.step_times
+
+    def _world_state(self) -> WorldState:
+        """The ground truth now."""
+        ball, ball_velocity = self.scene.ball_state()
+        return WorldState(
+            time_s=self._time_s,
+            names=tuple(r.name for r in self.robots),
+            kinds=tuple("nao" for _ in self.robots),
+            teams=np.array([r.team for r in self.robots], dtype=np.int64),
+            poses=np.array([r.pose for r in self.robots]),
+            heads=np.array([r.head for r in self.robots]),
+            blocked=self._blocked.copy(),
+            agent=AGENT,
+            ball=ball,
+            ball_velocity=ball_velocity,
+            landmarks=self.scene.landmarks.copy(),
+            landmark_ids=self.scene.landmark_ids.copy(),
+        )
+
+    def _current(self) -> tuple[WorldState, SensorFrame, PerceptionOutput]:
+        """This step's truth, sensor frame and perception output."""
+        if self._state is None or self._frame is None or self._output is None:
+            raise RuntimeError("call reset() first")
+        return self._state, self._frame, self._output
+
+    def _truth_and_belief(self) -> tuple[WorldState, PerceptionOutput]:
+        state, _, output = self._current()
+        return state, output
+
+    def _observation(self) -> dict[str, np.ndarray]:
+        _, frame, output = self._current()
+        return encode_all(self.encoders, EncoderInput(output=output, frame=frame))
+
+    def _info(self, terms: dict[str, float], times: Mapping[str, float]) -> dict[str, Any]:
+        state, _, output = self._current()
+        info: dict[str, Any] = {"reward_terms": terms}
+        if self.config.info_level == "full":
+            info["perception"] = perception_info(output, self.scene.landmark_ids)
+            info["ground_truth"] = ground_truth_info(state)
+        if self.config.info_timing:
+            info["timing"] = dict(times)
+        return info

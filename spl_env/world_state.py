@@ -1,0 +1,69 @@
+"""The ground truth of one step: every robot, the ball and the landmarks (field frame, SI)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from perception.geometry import FloatArray
+from perception.types import GroundTruth
+
+
+@dataclass(frozen=True, kw_only=True)
+class WorldState:
+    """Ground truth after a step.
+
+    Robot ``k`` has ``names[k]``, ``kinds[k]`` (``"nao"``), ``teams[k]`` (0 or 1), pose
+    ``poses[k]`` (3,) ``(x, y, θ)``, head angles ``heads[k]`` (2,) (yaw, pitch; rad) and
+    ``blocked[k]``, whether it bumped into something this step. Robot ``agent`` is the one the
+    env's policy drives (ours). ``ball`` (2,) and ``ball_velocity`` (2,) (m, m/s);
+    ``landmarks`` (L, 2) pole positions with ``landmark_ids`` (L,).
+    """
+
+    time_s: float
+    names: tuple[str, ...]
+    kinds: tuple[str, ...]
+    teams: NDArray[np.int64]
+    poses: FloatArray
+    heads: FloatArray
+    blocked: NDArray[np.bool_]
+    agent: int
+    ball: FloatArray
+    ball_velocity: FloatArray
+    landmarks: FloatArray
+    landmark_ids: NDArray[np.int64]
+
+    @property
+    def robot_pose(self) -> FloatArray:
+        """Our robot's pose (3,)."""
+        return self.poses[self.agent]
+
+    @property
+    def head(self) -> FloatArray:
+        """Our robot's head angles (2,) (rad)."""
+        return self.heads[self.agent]
+
+    @property
+    def others(self) -> NDArray[np.int64]:
+        """Indices (R,) of the robots other than ours."""
+        return np.array([k for k in range(len(self.names)) if k != self.agent], dtype=np.int64)
+
+    @property
+    def robots(self) -> FloatArray:
+        """Poses (R, 3) of the other robots."""
+        return self.poses[self.others].reshape(-1, 3)
+
+    @property
+    def robot_teams(self) -> NDArray[np.int64]:
+        """Teams (R,) of the other robots."""
+        return self.teams[self.others]
+
+    def truth_for(self, robot: int) -> GroundTruth:
+        """What an oracle provider of robot ``robot`` may read."""
+        return GroundTruth(
+            robot_pose=self.poses[robot].copy(),
+            landmark_ids=self.landmark_ids.copy(),
+            landmarks=self.landmarks.copy(),
+        )
