@@ -15,40 +15,49 @@ import numpy as np
 
 from agents.evaluate import Policy
 from perception.pipeline import PerceptionPipeline
-from perception.providers.base import PerceptionContext
 from perception.replay import SightingLog
-from perception.representations import POLE_SIGHTINGS, Prior
+from perception.representations import POLE_SIGHTINGS
 from perception.types import LandmarkObservation
 from spl_env.envs.core import SplEnv
 
+# SensorFrame fields an env fills only when its own pipeline reads them
+_CONDITIONAL_INPUTS = frozenset({"image", "truth"})
 
-def frontends_for(env: gym.Env, names: tuple[str, ...]) -> dict[str, PerceptionPipeline]:
-    """One pipeline computing only pole sightings per front end of ``names`` (the providers of
-    :data:`perception.pipeline.PROVIDERS` ``[POLE_SIGHTINGS]``) for ``env``'s camera, configured
-    as ``env``'s perception config configures them.
 
-    Each reads ``env``'s sensor frames: the image-based front ends need the rendered camera
-    mode. The front end ``env`` itself runs takes what the env's frames emulate for it (the
-    geometric camera mode's sightings), so it sees exactly what the env's SLAM saw.
+def frontends_for(env: gym.Env, names: tuple[str, ...]) -> dict[str, PerceptionPipeline | None]:
+    """What records each front end of ``names`` (the providers of
+    :data:`perception.pipeline.PROVIDERS` ``[POLE_SIGHTINGS]``) on ``env``'s frames: ``None``
+    for the front end ``env`` itself runs (its own sightings are recorded, so it sees exactly
+    what the env's SLAM saw), else a pipeline computing only pole sightings, configured as
+    ``env``'s perception config configures them and sharing its context (one CNN).
+
+    Raises ValueError for a front end that reads what ``env``'s frames do not carry (an image
+    in the geometric camera mode, the ground truth when the env runs no oracle).
     """
     core = _core(env)
-    config = core.config
-    context = PerceptionContext(
-        config.sensors.camera.model, core.scene.codes, config.scene.poles.geometry
-    )
-    return {
-        name: PerceptionPipeline(
-            dataclasses.replace(config.perception, pole_sightings=name),
-            context,
+    frontends: dict[str, PerceptionPipeline | None] = {}
+    for name in names:
+        if name == core.config.perception.pole_sightings:
+            frontends[name] = None
+            continue
+        pipeline = PerceptionPipeline(
+            dataclasses.replace(core.config.perception, pole_sightings=name),
+            core.perception_context,
             outputs=[POLE_SIGHTINGS],
-            emulated=core.pipeline.emulated if name == config.perception.pole_sightings else (),
         )
-        for name in names
-    }
+        missing = (pipeline.frame_inputs & _CONDITIONAL_INPUTS) - core.pipeline.frame_inputs
+        if missing:
+            raise ValueError(
+                f"front end {name!r} reads frame.{sorted(missing)}, which this env's frames do "
+                "not carry (an image needs camera_mode='rendered'; the truth an oracle in the "
+                "env's own perception)"
+            )
+        frontends[name] = pipeline
+    return frontends
 
 
 def record_episode(
-    env: gym.Env, policy: Policy, seed: int, frontends: Mapping[str, PerceptionPipeline]
+    env: gym.Env, policy: Policy, seed: int, frontends: Mapping[str, PerceptionPipeline | None]
 ) -> SightingLog:
     """Run one episode of ``policy`` on ``env`` (``info_level="full"``) and record what each
     of ``frontends`` (see :func:`frontends_for`) saw."""
@@ -57,7 +66,8 @@ def record_episode(
     # dead reckoning's pose at reset: the filter's start belief (reset's odometry is zero)
     believed_start = np.asarray(info["perception"]["odometry_pose"], dtype=np.float64).copy()
     for pipeline in frontends.values():
-        pipeline.reset(Prior(pose=believed_start, rng=np.random.default_rng(seed)))
+        if pipeline is not None:
+            pipeline.reset(believed_start, np.random.default_rng(seed))
     times, deltas, poses = [], [], []
     seen: dict[str, list[tuple[LandmarkObservation, ...]]] = {name: [] for name in frontends}
 
@@ -67,7 +77,8 @@ def record_episode(
         deltas.append(np.asarray(frame.odometry_delta, dtype=np.float64))
         poses.append(np.asarray(info["ground_truth"]["robot_pose"], dtype=np.float64))
         for name, pipeline in frontends.items():
-            seen[name].append(pipeline.step(frame)[POLE_SIGHTINGS])
+            output = core.perception_output if pipeline is None else pipeline.step(frame)
+            seen[name].append(output[POLE_SIGHTINGS])
 
     record(info)
     done, step = False, 0

@@ -44,7 +44,7 @@ from perception.geometry import FloatArray, range_bearing, wrap_angle
 from perception.types import CameraModel, LandmarkObservation, PoleGeometry
 from perception.vision import ColourFilterConfig, ColourPoleDetector
 from spl_env.robots.nao import NaoRobot, RobotConfig
-from spl_env.scenes.spl_field import SceneConfig, build_scene
+from spl_env.scenes.spl_field import SceneConfig, SplFieldScene
 from spl_env.sensors.camera import Camera, CameraConfig, EpisodeLighting, LightingRandomisation
 from spl_env.sim.world import BulletWorld
 
@@ -58,7 +58,7 @@ SEED_000 = {"precision": 0.974, "recall": 0.658}  # colour filter on the Nao dat
 class Bench:
     """The scene, the observing robot, clutter robots, camera and detector.
 
-    Built from the envs' modules (:func:`spl_env.scenes.spl_field.build_scene`,
+    Built from the envs' modules (:class:`spl_env.scenes.spl_field.SplFieldScene`,
     :class:`spl_env.robots.nao.NaoRobot`, :class:`spl_env.sensors.camera.Camera`). The posters
     and then every frame draw from one generator seeded with ``seed``, as when the published
     results were measured, so the same seed renders the same frames.
@@ -67,19 +67,18 @@ class Bench:
     def __init__(self, seed: int) -> None:
         self.rng = np.random.default_rng(seed)
         self.world = BulletWorld(time_step_s=0.01)
-        self.scene = SceneConfig()
-        self.bodies = build_scene(self.world, self.scene, self.rng)
+        self.field = SplFieldScene(self.world, SceneConfig(), poster_rng=self.rng)
+        self.scene = self.field.config
         robot_config = RobotConfig()
         self.robot = NaoRobot(self.world, "self", team=0, config=robot_config)
         self.others = [
             NaoRobot(self.world, f"robot_{i}", team=i % 2, config=robot_config) for i in range(4)
         ]
         self.camera = Camera(CameraConfig())
-        layout = self.scene.poles
-        self.codes = layout.codes()
-        self.poles = layout.positions(self.scene.dimensions)
+        self.codes = self.field.codes
+        self.poles = self.field.landmarks  # in id order: the layout's ids are 0..L-1
         self.detector = ColourPoleDetector(
-            ColourFilterConfig(), self.camera.config.model, self.codes, layout.geometry
+            ColourFilterConfig(), self.camera.config.model, self.codes, self.scene.poles.geometry
         )
 
     def random_frame(self, lighting: EpisodeLighting) -> tuple[np.ndarray, np.ndarray]:
@@ -117,7 +116,7 @@ class Bench:
         return pole_truth(
             labels,
             self.robot,
-            {i: self.world.body(name) for i, name in self.bodies.poles.items()},
+            dict(zip(self.field.landmark_ids.tolist(), self.field.pole_body_ids(), strict=True)),
             self.poles,
             self.camera.config.model,
             self.scene.poles.geometry,

@@ -52,25 +52,6 @@ def _policies(env: gym.Env, rng: np.random.Generator) -> dict[str, Any]:
     }
 
 
-def _geometric_camera(core: SplEnv) -> GeometricPoleCamera:
-    """The geometric camera mode's pole camera for ``core``'s scene (as the env builds it)."""
-    cfg, scene = core.config, core.scene
-    return GeometricPoleCamera(
-        cfg.sensors.geometric_camera,
-        cfg.sensors.camera.model,
-        cfg.scene.poles.geometry,
-        scene.landmarks,
-        tuple(int(i) for i in scene.landmark_ids),
-        scene.pole_body_ids(),
-    )
-
-
-def _camera_yaw(info: dict[str, Any]) -> float:
-    """Our camera's heading in the field (rad): body heading plus head yaw, from ``info``."""
-    gt = info["ground_truth"]
-    return float(gt["robot_pose"][2] + gt["head"][0])
-
-
 def collect(episodes: int, seconds: float, seed: int) -> dict[str, list]:
     """Per visible pole: smear, detection, rendered errors, and what the geometric model needs."""
     env = gym.make("SPL/ActiveVision-v0", episode_s=seconds, frontend="colour")
@@ -81,7 +62,9 @@ def collect(episodes: int, seconds: float, seed: int) -> dict[str, list]:
     if not isinstance(sightings, ColourPoleSightings):
         raise TypeError(f"the fit needs the colour front end, got {type(sightings).__name__}")
     camera = core.config.sensors.camera
-    geometric = _geometric_camera(core)
+    geometric = GeometricPoleCamera.for_scene(
+        core.scene, core.config.sensors.geometric_camera, camera.model
+    )
     ours = core.robots[0]
     rows: dict[str, list] = {"smear": [], "detected": [], "err": [], "geometry": [], "policy": []}
     for name, predict in _policies(env, np.random.default_rng(seed)).items():
@@ -89,7 +72,6 @@ def collect(episodes: int, seconds: float, seed: int) -> dict[str, list]:
             obs, info = env.reset(seed=seed + k)
             done, step = False, 0
             while not done:
-                yaw_before = _camera_yaw(info)
                 action, _ = predict(obs, episode_start=np.array([step == 0]))
                 obs, _, terminated, truncated, info = env.step(action)
                 done, step = terminated or truncated, step + 1
@@ -99,10 +81,10 @@ def collect(episodes: int, seconds: float, seed: int) -> dict[str, list]:
                 )
                 position, rotation = ours.camera_pose_world()
                 visible = geometric.visible(core.world, position, rotation)
-                # the camera's turn rate this step, as the env computes it for motion blur
-                yaw_rate = float(wrap_angle(_camera_yaw(info) - yaw_before))
-                yaw_rate /= core.config.control_dt_s
-                blur = blur_length_px(yaw_rate, camera.exposure_time_s, camera.model.fx)
+                # the camera's turn rate this step, which the env's motion blur used
+                blur = blur_length_px(
+                    core.camera_yaw_rate_rps, camera.exposure_time_s, camera.model.fx
+                )
                 seen = info["perception"]
                 detected = {
                     int(i): (float(rb[0]), float(rb[1]))

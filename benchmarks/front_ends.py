@@ -9,10 +9,11 @@ and recall at each score threshold of ``--thresholds`` (``cnn_sweep``). Writes
 
 ``--protocol walking``: the analogue of seed 000's Table 4.2: 150 random frames from our robot
 walking a patrol (random waypoints) with the classic head scan, among four scripted robots,
-with lighting randomised per episode (:class:`WalkingWorld`: the envs' scene, robot and sensor
-rig). Per front end: true and false positives, false negatives, images with no pole in view and
-no detection (true negatives), precision and recall (any range, as the seed), the localisation
-error (px) of the detection's box centre against the truth's and the mean IoU of the boxes.
+with lighting randomised per episode (``SPL/ActiveVision-v0`` itself, its frames read by both
+detectors). Per front end: true and false positives, false negatives, images with no pole in
+view and no detection (true negatives), precision and recall (any range, as the seed), the
+localisation error (px) of the detection's box centre against the truth's and the mean IoU of
+the boxes.
 The truth box of a CNN detection is the pole's label box (all its seen pixels); the colour
 filter only boxes the two colour bands, so its truth box is the label box above the white base.
 Also the error (px) of the pole centre (the junction of the bands, the seed's reference point)
@@ -39,13 +40,15 @@ import time
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 import torch
 from colour_filter_accuracy import MIN_VIEW_PX, NEAR_M, Bench, is_true_positive, pole_truth, score
 
+import spl_env  # noqa: F401  (registers the env ids)
 from agents.baselines import HeadScan
-from perception.geometry import FloatArray, project_points, wrap_angle
-from perception.types import CameraModel, LandmarkObservation, SensorFrame
+from perception.geometry import FloatArray, project_points
+from perception.types import LandmarkObservation
 from perception.vision import (
     CnnDetectorConfig,
     CnnPoleDetector,
@@ -53,20 +56,13 @@ from perception.vision import (
     ColourPoleDetector,
 )
 from perception.vision.cnn_detector import box_iou, pole_class_name
-from spl_env.behaviours import WalkerConfig, WanderingRobots, WaypointWalker
-from spl_env.robots.nao import NaoRobot, RobotConfig
-from spl_env.scenes.spl_field import SceneConfig, SplFieldScene
-from spl_env.sensors.camera import CameraConfig, EpisodeLighting, LightingRandomisation
-from spl_env.sensors.rig import NaoRig, RigConfig
-from spl_env.sim.placement import Placement
-from spl_env.sim.world import BulletWorld
+from spl_env.envs.core import SplEnv
+from spl_env.sensors.camera import EpisodeLighting, LightingRandomisation
 
 RESULTS = Path("benchmarks/results")
 FRONT_ENDS = ("colour_filter", "cnn")
 IOU_MATCH = 0.5  # other classes: a detection with this IoU matches a labelled object
 CONTROL_DT_S = 0.1  # walking: one control step = one camera frame (as the envs)
-PHYSICS_DT_S = 0.01
-N_OTHER_ROBOTS = 4
 
 
 def run_random(
@@ -147,110 +143,30 @@ def _centre(box: FloatArray | list[float]) -> FloatArray:
     return np.array([(box[0] + box[2]) / 2, (box[1] + box[3]) / 2])
 
 
-class WalkingWorld:
-    """The walking protocol's world, built from the envs' modules: the SPL field (posters drawn
-    from ``scene_seed``), our robot with its sensor rig (rendered camera, lighting randomised per
-    episode) and ``N_OTHER_ROBOTS`` scripted robots wandering to random waypoints.
-
-    Our robot walks the commands it is given; everything draws from the generator handed to
-    :meth:`reset`. Call :meth:`close` when done.
-    """
-
-    def __init__(self, scene_seed: int) -> None:
-        self.world = BulletWorld(time_step_s=PHYSICS_DT_S)
-        self.scene = SplFieldScene(self.world, SceneConfig(scene_seed=scene_seed))
-        robot = RobotConfig()
-        self.robot = NaoRobot(self.world, "self", team=0, config=robot)
-        self.others = [
-            NaoRobot(self.world, f"robot_{i}", team=(i + 1) % 2, config=robot)
-            for i in range(N_OTHER_ROBOTS)
-        ]
-        self.placement = Placement(self.scene.dimensions, self.scene.obstacles, robot.body_radius_m)
-        self.rig = NaoRig(RigConfig(camera=CameraConfig(randomise_lighting=True)), self.robot)
-        self.walker_config = WalkerConfig()
-        self.wanderers = WanderingRobots(self.walker_config, self.scene.dimensions)
-        self.blocked = np.zeros(1 + N_OTHER_ROBOTS, dtype=bool)  # ours first
-        self._rng = np.random.default_rng(0)
-        self._time_s = 0.0
-
-    @property
-    def model(self) -> CameraModel:
-        """Our camera's intrinsics."""
-        return self.rig.config.camera.model
-
-    def reset(self, rng: np.random.Generator, start: FloatArray) -> SensorFrame:
-        """Our robot at ``start`` (3,), the others and the ball anywhere; the first frame."""
-        self._rng, self._time_s = rng, 0.0
-        self.blocked[:] = False
-        self.robot.place(start)
-        self.wanderers.reset(rng, self.others, self.placement, [self.robot])
-        self.scene.place_ball(np.array([rng.uniform(-2.0, 2.0), rng.uniform(-1.5, 1.5)]))
-        self.rig.reset(rng)
-        frame, _ = self.rig.sense(self.world, 0.0, np.zeros(3), 0.0, rng, render=True)
-        return frame
-
-    def step(self, walk: FloatArray, head: FloatArray) -> SensorFrame:
-        """One control step: our walk command (3,) and head target (2,), the others wander."""
-        dt, robots = CONTROL_DT_S, [self.robot, *self.others]
-        yaw_before = self.robot.pose[2] + self.robot.head[0]
-        walks = [
-            walk,
-            *self.wanderers.commands(np.array([o.pose for o in self.others]), dt, self.blocked[1:]),
-        ]
-        self.robot.move_head(head, dt)
-        engine_delta = np.zeros(3)
-        for k, (robot, command) in enumerate(zip(robots, walks, strict=True)):
-            others = [r for r in robots if r is not robot]
-            increment, self.blocked[k] = self.placement.walk(robot, command, dt, others)
-            if k == 0:
-                engine_delta = increment
-        self.world.step(round(CONTROL_DT_S / PHYSICS_DT_S))
-        self._time_s += dt
-        yaw_rate = float(wrap_angle(self.robot.pose[2] + self.robot.head[0] - yaw_before)) / dt
-        frame, _ = self.rig.sense(
-            self.world, self._time_s, engine_delta, yaw_rate, self._rng, render=True
-        )
-        return frame
-
-    def labels(self) -> np.ndarray:
-        """(H, W) body ids of what the camera sees now (a noise-free render)."""
-        _, labels = self.rig.camera.render(
-            self.world,
-            *self.robot.camera_pose_world(),
-            EpisodeLighting.default(),
-            np.random.default_rng(0),
-        )
-        return labels
-
-    def close(self) -> None:
-        """Release the physics client."""
-        self.world.close()
-
-
-def _project(sim: WalkingWorld, point: FloatArray) -> FloatArray:
-    """Pixel (2,) of a field point (3,) in the current true camera frame (NaN if behind)."""
-    position, rotation = sim.robot.camera_pose_world()
-    m = sim.model
+def _project(core: SplEnv, point: FloatArray) -> FloatArray:
+    """Pixel (2,) of a field point (3,) in our robot's true camera frame now (NaN if behind)."""
+    position, rotation = core.robots[0].camera_pose_world()
+    m = core.config.sensors.camera.model
     uv, _ = project_points(((point - position) @ rotation)[None], m.fx, m.fy, m.cx, m.cy)
     return uv[0]
 
 
-def walking_truth(sim: WalkingWorld, labels: np.ndarray) -> dict[str, Any]:
+def walking_truth(core: SplEnv, labels: np.ndarray) -> dict[str, Any]:
     """Per pole: range, bearing, in view, visible, label box, band box and junction pixel; and
     the label boxes of the other classes' objects."""
-    scene = sim.scene
+    scene, robot, model = core.scene, core.robots[0], core.config.sensors.camera.model
     geometry = scene.config.poles.geometry
     positions = scene.config.poles.positions(scene.dimensions)
-    bodies = {i: sim.world.body(name) for i, name in scene.bodies.poles.items()}
-    truth = pole_truth(labels, sim.robot, bodies, positions, sim.model, geometry)
-    position, _ = sim.robot.camera_pose_world()
+    bodies = {i: core.world.body(name) for i, name in scene.bodies.poles.items()}
+    truth = pole_truth(labels, robot, bodies, positions, model, geometry)
+    position, _ = robot.camera_pose_world()
     poles: dict[int, dict[str, Any]] = {}
     for i, t in truth.items():
         xy = positions[i]
         towards = (xy - position[:2]) / np.linalg.norm(xy - position[:2])
         near = xy - geometry.radius_m * towards
-        base_row = _project(sim, np.array([*near, geometry.base_top_m]))[1]
-        junction = _project(sim, np.array([*xy, geometry.base_top_m + geometry.band_height_m]))
+        base_row = _project(core, np.array([*near, geometry.base_top_m]))[1]
+        junction = _project(core, np.array([*xy, geometry.base_top_m + geometry.band_height_m]))
         mask = labels == bodies[i]
         rows = np.arange(labels.shape[0])[:, None]
         poles[i] = {
@@ -263,10 +179,10 @@ def walking_truth(sim: WalkingWorld, labels: np.ndarray) -> dict[str, Any]:
     for name, bodies_of in (
         ("goal_post", scene.bodies.goal_posts),
         ("ball", (scene.bodies.ball,)),
-        ("robot", tuple(o.name for o in sim.others)),
+        ("robot", tuple(o.name for o in core.robots[1:])),
     ):
         for body_name in bodies_of:
-            mask = labels == sim.world.body(body_name)
+            mask = labels == core.world.body(body_name)
             box = _box(mask)
             if box is not None:
                 others.append({"class": name, "box": box, "pixels": int(mask.sum())})
@@ -288,42 +204,44 @@ def _observation_json(obs: LandmarkObservation) -> dict[str, Any]:
 def run_walking(
     seed: int, episodes: int, steps: int, images: int, cnn_config: CnnDetectorConfig
 ) -> tuple[dict, list[dict]]:
-    """Table 4.2 analogue: summary and per-image records over ``images`` random walking frames."""
+    """Table 4.2 analogue: summary and per-image records over ``images`` random walking frames.
+
+    Each episode is ``SPL/ActiveVision-v0`` (patrol, randomised lighting, posters drawn from
+    ``1000 seed + episode``) driven by the head scan; both detectors read the env's frames.
+    """
     rng = np.random.default_rng(seed)
     picked = set(rng.choice(episodes * steps, size=images, replace=False).tolist())
     records: list[dict] = []
     for episode in range(episodes):
-        sim = WalkingWorld(scene_seed=1000 * seed + episode)
-        codes, model, geometry = sim.scene.codes, sim.model, sim.scene.config.poles.geometry
+        env = gym.make(
+            "SPL/ActiveVision-v0",
+            frontend="colour",
+            randomise_lighting=True,
+            episode_s=steps * CONTROL_DT_S,
+            **{"scene.scene_seed": 1000 * seed + episode, "control_dt_s": CONTROL_DT_S},
+        )
+        core = env.unwrapped
+        assert isinstance(core, SplEnv)
+        codes, geometry = core.scene.codes, core.config.scene.poles.geometry
+        model = core.config.sensors.camera.model
         cnn = CnnPoleDetector(cnn_config, model, codes, geometry)
         colour = ColourPoleDetector(ColourFilterConfig(), model, codes, geometry)
         landmark_of = {pole_class_name(c): c.landmark_id for c in codes}
-        episode_rng = np.random.default_rng([seed, episode])
-        dims = sim.scene.dimensions
-        start = np.array(
-            [
-                episode_rng.uniform(-dims.half_length_m + 0.5, dims.half_length_m - 0.5),
-                episode_rng.uniform(-dims.half_width_m + 0.5, dims.half_width_m - 0.5),
-                episode_rng.uniform(-math.pi, math.pi),
-            ]
-        )
-        sim.reset(episode_rng, start)
-        walker = WaypointWalker(sim.walker_config, dims, episode_rng)
+        policy = HeadScan.from_config(core.config)
+        obs, _ = env.reset(seed=1000 * seed + episode)
         for step in range(steps):
-            command = walker.command(sim.robot.pose, CONTROL_DT_S, blocked=bool(sim.blocked[0]))
-            t = step * CONTROL_DT_S
-            yaw = HeadScan.amplitude_rad * math.sin(2 * math.pi * t / HeadScan.period_s)
-            frame = sim.step(command, np.array([yaw, 0.0]))
+            action, _ = policy.predict(obs, episode_start=np.array([step == 0]))
+            obs, *_ = env.step(action)
+            frame = core.sensor_frame
             if episode * steps + step not in picked or frame.image is None:
                 continue
             assert frame.camera_state is not None  # the rig always reports it
-            labels = sim.labels()
             detections = cnn.detect_objects(frame.image)
             records.append(
                 {
                     "episode": episode,
                     "step": step,
-                    "truth": walking_truth(sim, labels),
+                    "truth": walking_truth(core, core.rig.camera_view(core.world)[1]),
                     "colour_filter": [
                         _observation_json(o) for o in colour.detect(frame.image, frame.camera_state)
                     ],
@@ -343,7 +261,7 @@ def run_walking(
                     ],
                 }
             )
-        sim.close()
+        env.close()
     return summarise_walking(records), records
 
 

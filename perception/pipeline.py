@@ -25,6 +25,9 @@ from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
+from perception.geometry import FloatArray
 from perception.providers.base import PerceptionContext, Provider
 from perception.providers.odometry import DeadReckoning
 from perception.providers.oracles import OracleConfig, OraclePoleSightings, OracleSelfPose
@@ -41,12 +44,14 @@ from perception.representations import (
     ODOMETRY_POSE,
     POLE_LAST_SEEN,
     POLE_SIGHTINGS,
+    REPRESENTATIONS,
     SELF_POSE,
     PerceptionOutput,
     Prior,
 )
 from perception.slam import EkfSlamConfig
 from perception.types import SensorFrame
+from perception.validation import check_choice, check_in_interval
 from perception.vision.cnn_detector import CnnDetectorConfig
 from perception.vision.colour_filter import ColourFilterConfig
 
@@ -57,7 +62,7 @@ PROVIDERS: Mapping[str, Mapping[str, ProviderFactory]] = {
     ODOMETRY_POSE: {"dead_reckoning": lambda c, ctx: DeadReckoning()},
     IMAGE_DETECTIONS: {"cnn": lambda c, ctx: CnnDetections(c.cnn, ctx)},
     POLE_SIGHTINGS: {
-        "cnn": lambda c, ctx: CnnPoleSightings(c.cnn, ctx),
+        "cnn": lambda c, ctx: CnnPoleSightings(c.cnn, c.cnn_pole_score_threshold, ctx),
         "colour": lambda c, ctx: ColourPoleSightings(c.colour_filter, ctx),
         "oracle": lambda c, ctx: OraclePoleSightings(c.oracle, ctx),
     },
@@ -83,33 +88,47 @@ class PipelineConfig:
     pole_sightings: str = "cnn"  # one of PROVIDERS["pole_sightings"]
     self_pose: str = "ekf_slam"  # one of PROVIDERS["self_pose"]
     colour_filter: ColourFilterConfig = field(default_factory=ColourFilterConfig)
-    # SLAM takes CNN detections scoring 0.6 or more whose two band colours are both seen,
-    # stricter than the detector's defaults (0.4, its precision/recall balance): on the tuning
-    # walks the class confusions that pass at 0.3-0.5 start a landmark in the wrong place
-    # (0.11-1.3 m landmark error), and on a patrol (seed 101) a pole whose lower band a robot
-    # hid was taken for its neighbour.
+    # The CNN's image detections (every class; read by every consumer) at the detector's own
+    # threshold, 0.4 (its precision/recall balance on the tuning frames). Pole sightings for
+    # SLAM need both band colours seen, and a score of cnn_pole_score_threshold.
     cnn: CnnDetectorConfig = field(
-        default_factory=lambda: CnnDetectorConfig(score_threshold=0.6, require_both_colours=True)
+        default_factory=lambda: CnnDetectorConfig(require_both_colours=True)
     )
+    # SLAM takes CNN pole detections scoring 0.6 or more, stricter than the detector's 0.4: on
+    # the tuning walks the class confusions that pass at 0.3-0.5 start a landmark in the wrong
+    # place (0.11-1.3 m landmark error), and on a patrol (seed 101) a pole whose lower band a
+    # robot hid was taken for its neighbour. At least cnn.score_threshold.
+    cnn_pole_score_threshold: float = 0.6
     # The seed's 0.4 m / pi/3 gate. It can lock a badly started landmark out of every
     # correction (seed 000 §4.1); EkfSlamConfig() alone is seed 000's classic Algorithm 5.
     slam: EkfSlamConfig = field(default_factory=lambda: EkfSlamConfig(backend="gated"))
     oracle: OracleConfig = field(default_factory=OracleConfig)
 
     def __post_init__(self) -> None:
-        for representation in (POLE_SIGHTINGS, SELF_POSE):
-            name = getattr(self, representation)
-            if name not in PROVIDERS[representation]:
-                raise ValueError(
-                    f"PipelineConfig.{representation} must be one of "
-                    f"{tuple(PROVIDERS[representation])}, got {name!r}"
+        for representation in PROVIDERS:
+            if hasattr(self, representation):
+                check_choice(
+                    "PipelineConfig",
+                    representation,
+                    getattr(self, representation),
+                    tuple(PROVIDERS[representation]),
                 )
+        check_in_interval(
+            "PipelineConfig",
+            "cnn_pole_score_threshold",
+            self.cnn_pole_score_threshold,
+            self.cnn.score_threshold,
+            1.0,
+            low_inclusive=True,
+        )
 
     def provider_name(self, representation: str) -> str:
-        """The provider configured for ``representation`` (the only one where there is one)."""
-        if representation in (POLE_SIGHTINGS, SELF_POSE):
+        """The provider of ``representation``: the field of that name where the choice is the
+        config's, else the only registered one."""
+        if hasattr(self, representation):
             return str(getattr(self, representation))
-        return next(iter(PROVIDERS[representation]))
+        (only,) = PROVIDERS[representation]
+        return only
 
 
 class PerceptionPipeline:
@@ -128,13 +147,16 @@ class PerceptionPipeline:
         emulated: Collection[str] = (),
     ) -> None:
         self.config = config
-        self.emulated = frozenset(emulated)
         self._providers: dict[str, Provider] = {}  # in dependency order
         inputs: set[str] = set()
+        reached: set[str] = set()  # of the emulated representations, those something reads
         visiting: list[str] = []
 
         def resolve(name: str) -> None:
-            if name in self._providers or name in self.emulated or name in inputs:
+            if name in emulated:
+                reached.add(name)
+                return
+            if name in self._providers or name in inputs:
                 return
             if name in FRAME_INPUTS:
                 inputs.add(name)
@@ -156,6 +178,7 @@ class PerceptionPipeline:
         for name in outputs:
             resolve(name)
         self.frame_inputs = frozenset(inputs)  # the SensorFrame fields the providers read
+        self.emulated = frozenset(reached)  # the emulated representations it reads
 
     @property
     def representations(self) -> tuple[str, ...]:
@@ -166,10 +189,14 @@ class PerceptionPipeline:
         """The provider computing ``representation``; KeyError if none in this pipeline."""
         return self._providers[representation]
 
-    def reset(self, prior: Prior) -> None:
-        """Start an episode: every provider forgets the last one."""
-        for provider in self._providers.values():
-            provider.reset(prior)
+    def reset(self, pose: FloatArray, rng: np.random.Generator) -> None:
+        """Start an episode from the believed start ``pose`` (3,): every provider forgets the last
+        one. Each gets its own generator spawned from ``rng`` (one per known representation, in a
+        fixed order, whether or not it runs), so which providers run changes no draw of another
+        and ``rng``'s own stream is not advanced."""
+        generators = dict(zip(REPRESENTATIONS, rng.spawn(len(REPRESENTATIONS)), strict=True))
+        for name, provider in self._providers.items():
+            provider.reset(Prior(pose=pose, rng=generators[name]))
 
     def step(self, frame: SensorFrame) -> PerceptionOutput:
         """Run every provider once on ``frame``; ValueError if it lacks an input they read."""

@@ -23,12 +23,13 @@ name                   value
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, fields
 from typing import Any, TypeVar
 
 import numpy as np
 
 from perception.geometry import FloatArray
+from perception.types import SensorFrame
 
 ODOMETRY_POSE = "odometry_pose"
 IMAGE_DETECTIONS = "image_detections"
@@ -37,31 +38,22 @@ POLE_LAST_SEEN = "pole_last_seen"
 SELF_POSE = "self_pose"
 REPRESENTATIONS = (ODOMETRY_POSE, IMAGE_DETECTIONS, POLE_SIGHTINGS, POLE_LAST_SEEN, SELF_POSE)
 
-FRAME_INPUTS = (
-    "odometry_delta",
-    "camera",
-    "camera_state",
-    "image",
-    "sonar",
-    "sonar_model",
-    "laser",
-    "laser_model",
-    "truth",
-)
+# the SensorFrame fields a provider may read (all but its time and the emulated representations)
+FRAME_INPUTS = tuple(f.name for f in fields(SensorFrame) if f.name not in ("time_s", "emulated"))
 
 T = TypeVar("T")
 
 
 @dataclass(frozen=True, kw_only=True)
 class Prior:
-    """What perception is told at the start of an episode.
+    """What a provider is told at the start of an episode.
 
-    ``pose`` (3,) is the believed start pose ``(x, y, θ)`` (field frame, m, m, rad); ``rng`` is
-    the episode's generator, for providers that draw noise (the oracles).
+    ``pose`` (3,) is the believed start pose ``(x, y, θ)`` (field frame, m, m, rad); ``rng`` a
+    generator for providers that draw noise (the oracles), seeded from the episode's.
     """
 
     pose: FloatArray
-    rng: np.random.Generator = field(default_factory=lambda: np.random.default_rng(0))
+    rng: np.random.Generator
 
     def __post_init__(self) -> None:
         pose = np.asarray(self.pose, dtype=np.float64)

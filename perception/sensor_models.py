@@ -2,9 +2,11 @@
 
 A laser scan (B,) or a sonar reading (3, max_echoes) is just distances; these models give them
 their geometry and noise: where each beam or sector points, from where, over which range, and
-how noisy its distances are. The simulator builds its sensors from the same models (through
-``spl_env.sensors.laser.LaserConfig.model`` and ``spl_env.sensors.sonar.SonarConfig.model``), so
-a scan is interpreted with the geometry it was made with.
+how noisy its distances are. The simulator's sensors are configured with these very models
+(``spl_env.sensors.laser.LaserConfig`` is a :class:`LaserModel`;
+``spl_env.sensors.sonar.SonarConfig`` is a :class:`SonarModel` plus two settings of the
+simulation's own), so a scan is interpreted with the geometry it was made with. The defaults are
+seed 001's laser and the Nao's sonar as seed 004 describes it.
 
 Frames: angles are in the robot frame, in radians, 0 = the robot's heading, positive to its left
 (counter-clockwise seen from above). The sensor sits ``mount_x_m`` ahead of the robot origin on
@@ -19,39 +21,45 @@ from dataclasses import dataclass
 import numpy as np
 
 from perception.geometry import FloatArray
+from perception.validation import InvalidTypeError, check_finite, check_int, check_positive
 
 N_SONAR_SECTORS = 3  # left, middle, right
-
-
-def _check_positive(prefix: str, owner: object, *names: str) -> None:
-    """Raise ValueError naming the first of ``names`` whose value is not finite and > 0."""
-    for name in names:
-        value = getattr(owner, name)
-        if not (math.isfinite(value) and value > 0):
-            raise ValueError(f"{prefix}.{name} must be finite and > 0, got {value}")
-
-
-def _check_int(prefix: str, name: str, value: object) -> None:
-    """Raise ValueError unless ``value`` is an int >= 1 (bool not allowed)."""
-    if not isinstance(value, int) or isinstance(value, bool) or value < 1:
-        raise ValueError(f"{prefix}.{name} must be an int >= 1, got {value!r}")
 
 
 def _check_ranges(prefix: str, model: LaserModel | SonarModel) -> None:
     """Raise ValueError unless the range interval is valid, the noise std finite and >= 0 and
     the mount's forward offset finite."""
-    _check_positive(prefix, model, "min_range_m", "max_range_m", "mount_height_m")
+    for name in ("min_range_m", "max_range_m", "mount_height_m"):
+        check_positive(prefix, name, getattr(model, name))
     if model.min_range_m >= model.max_range_m:
         raise ValueError(
             f"{prefix}.min_range_m must be < max_range_m, "
             f"got {model.min_range_m} >= {model.max_range_m}"
         )
-    if not (math.isfinite(model.range_noise_std_m) and model.range_noise_std_m >= 0):
-        raise ValueError(
-            f"{prefix}.range_noise_std_m must be finite and >= 0, got {model.range_noise_std_m}"
+    check_positive(prefix, "range_noise_std_m", model.range_noise_std_m, allow_zero=True)
+    check_finite(prefix, "mount_x_m", model.mount_x_m)
+
+
+def _check_sectors(name: str, values: object, *, max_width_deg: float | None = None) -> None:
+    """Raise unless ``values`` are one finite angle (deg) per sector; with ``max_width_deg``,
+    cone widths in (0, max_width_deg]. Errors name ``sonar.<name>``."""
+    if not isinstance(values, (tuple, list)):
+        raise InvalidTypeError(
+            f"sonar.{name} must be a tuple of {N_SONAR_SECTORS} angles (deg), "
+            f"got {type(values).__name__} {values!r}"
         )
-    if not math.isfinite(model.mount_x_m):
-        raise ValueError(f"{prefix}.mount_x_m must be finite, got {model.mount_x_m}")
+    if len(values) != N_SONAR_SECTORS:
+        raise ValueError(
+            f"sonar.{name} must be {N_SONAR_SECTORS} angles (deg; left, middle, right), "
+            f"got {values!r}"
+        )
+    for k, value in enumerate(values):
+        if max_width_deg is None:
+            check_finite("sonar", f"{name}[{k}]", value)
+        else:
+            check_positive(
+                "sonar", f"{name}[{k}]", value, upper=max_width_deg, upper_inclusive=True
+            )
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -61,21 +69,21 @@ class LaserModel:
 
     A scan is (n_beams,) ranges (m) from the scanner centre, beam i along ``beam_angles()[i]``;
     each range carries Gaussian noise of ``range_noise_std_m``, and a beam with no return in
-    [``min_range_m``, ``max_range_m``] reads NaN.
+    [``min_range_m``, ``max_range_m``] reads NaN. Defaults: seed 001's Hokuyo UST-30LX on a
+    Pioneer 3-DX. Bad fields raise ``ValueError`` naming ``laser.<field>``.
     """
 
-    n_beams: int  # beams, evenly spaced over the field of view
-    fov_deg: float  # field of view (deg, in (0, 360]), centred on the robot's heading
-    min_range_m: float  # nearer returns are dropped
-    max_range_m: float  # beams reach this far
-    range_noise_std_m: float  # Gaussian range noise
-    mount_x_m: float  # scanner centre ahead of the robot origin
-    mount_height_m: float  # scan plane above the ground
+    n_beams: int = 180  # beams, evenly spaced over the field of view
+    fov_deg: float = 180.0  # field of view (deg, in (0, 360]), centred on the robot's heading
+    min_range_m: float = 0.1  # nearer returns are dropped (seed 001's accuracy spec: 0.1-10 m)
+    max_range_m: float = 10.0  # beams reach this far
+    range_noise_std_m: float = 0.02  # Gaussian range noise (seed 001)
+    mount_x_m: float = 0.0  # scanner centre ahead of the robot origin
+    mount_height_m: float = 0.30  # scan plane above the ground (on top of a Pioneer 3-DX)
 
     def __post_init__(self) -> None:
-        _check_int("laser", "n_beams", self.n_beams)
-        if not (0.0 < self.fov_deg <= 360.0):
-            raise ValueError(f"laser.fov_deg must be in (0, 360], got {self.fov_deg}")
+        check_int("laser", "n_beams", self.n_beams, 1)
+        check_positive("laser", "fov_deg", self.fov_deg, upper=360.0, upper_inclusive=True)
         _check_ranges("laser", self)
 
     def beam_angles(self) -> FloatArray:
@@ -95,36 +103,27 @@ class SonarModel:
     the sector's cone, echoes closer together than ``echo_merge_m`` merged into the nearer one,
     each with Gaussian noise of ``range_noise_std_m``, only those in [``min_range_m``,
     ``max_range_m``]. An echo says something is at that distance somewhere in the cone, not
-    at which bearing.
+    at which bearing. Defaults: the Nao's chest sonar with seed 004's three sectors (Nao v3/v4
+    spec: 60° cones, 0.25-2.55 m; rUNSWift's narrower middle sector). Bad fields raise
+    ``ValueError`` naming ``sonar.<field>``.
     """
 
-    sector_centres_deg: tuple[float, float, float]  # left, middle, right (deg, + = left)
-    sector_widths_deg: tuple[float, float, float]  # full cone widths (deg, in (0, 180])
-    min_range_m: float  # no distance below this
-    max_range_m: float  # nothing heard beyond this
-    max_echoes: int  # echoes reported per sector, nearest first
-    echo_merge_m: float  # echoes closer than this merge into one
-    range_noise_std_m: float  # Gaussian noise on each echo's distance
-    mount_x_m: float  # transducers ahead of the robot origin
-    mount_height_m: float  # transducers above the ground
+    sector_centres_deg: tuple[float, float, float] = (25.0, 0.0, -25.0)  # left, middle, right
+    sector_widths_deg: tuple[float, float, float] = (60.0, 40.0, 60.0)  # 60° cones; middle ~40°
+    min_range_m: float = 0.25  # no distance below this (Nao spec, seed 004)
+    max_range_m: float = 2.55  # nothing heard beyond this (Nao spec, seed 004)
+    max_echoes: int = 10  # echoes reported per sector, nearest first (NAOqi: 10)
+    echo_merge_m: float = 0.05  # echoes closer than this merge into one (seed 004: 5 cm)
+    range_noise_std_m: float = 0.01  # Gaussian noise on each echo's distance (Nao: 1 cm resolution)
+    mount_x_m: float = 0.05  # ahead of the robot origin (Nao: 0.048-0.054 m ahead of the torso)
+    mount_height_m: float = 0.30  # transducers on the chest, above the ground
 
     def __post_init__(self) -> None:
         _check_ranges("sonar", self)
-        _check_positive("sonar", self, "echo_merge_m")
-        if len(self.sector_centres_deg) != N_SONAR_SECTORS or not all(
-            math.isfinite(c) for c in self.sector_centres_deg
-        ):
-            raise ValueError(
-                f"sonar.sector_centres_deg must be 3 finite angles, got {self.sector_centres_deg}"
-            )
-        if len(self.sector_widths_deg) != N_SONAR_SECTORS or not all(
-            0.0 < w <= 180.0 for w in self.sector_widths_deg
-        ):
-            raise ValueError(
-                "sonar.sector_widths_deg must be 3 widths in (0, 180], "
-                f"got {self.sector_widths_deg}"
-            )
-        _check_int("sonar", "max_echoes", self.max_echoes)
+        check_positive("sonar", "echo_merge_m", self.echo_merge_m)
+        _check_sectors("sector_centres_deg", self.sector_centres_deg)
+        _check_sectors("sector_widths_deg", self.sector_widths_deg, max_width_deg=180.0)
+        check_int("sonar", "max_echoes", self.max_echoes, 1)
 
     def sector_centres_rad(self) -> FloatArray:
         """Sector axes (3,) in the robot frame (rad, + = left): left, middle, right."""

@@ -11,9 +11,11 @@ top-level name (``control_dt_s=0.2``) or by one of the env's aliases (:data:`SPL
 from __future__ import annotations
 
 import math
+import typing
 from dataclasses import dataclass, field
 
 from perception.pipeline import PipelineConfig
+from perception.validation import check_choice
 from spl_env.robots.nao import RobotConfig
 from spl_env.scenes.spl_field import SceneConfig
 from spl_env.sensors.rig import RigConfig
@@ -34,7 +36,7 @@ SPL_ALIASES: dict[str, str] = {
     "backend": "perception.slam.backend",
     "min_views": "perception.slam.min_views",
     "gate": "perception.slam.gate",
-    "score_threshold": "perception.cnn.score_threshold",
+    "score_threshold": "perception.cnn_pole_score_threshold",
 }
 
 
@@ -81,16 +83,12 @@ class EnvConfig:
             raise ValueError(
                 "EnvConfig.scene.poles_enabled must be True: the SPL envs map the poles"
             )
-        if self.perception.pole_sightings == "cnn" and self.sensors.camera_mode != "rendered":
-            raise ValueError(
-                "EnvConfig.perception.pole_sightings='cnn' (the default) needs "
-                "sensors.camera_mode='rendered' (the CNN reads pixels), got camera_mode="
-                f"{self.sensors.camera_mode!r}; the geometric mode emulates the colour front end: "
-                "pass frontend='colour' with it"
-            )
-        if self.info_level not in INFO_LEVELS:
-            raise ValueError(
-                f"EnvConfig.info_level must be one of {INFO_LEVELS}, got {self.info_level!r}"
+        check_choice("EnvConfig", "info_level", self.info_level, INFO_LEVELS)
+        task_class = typing.get_type_hints(type(self))["task"]
+        if not isinstance(self.task, task_class):
+            raise TypeError(
+                f"{type(self).__name__}.task must be a {task_class.__name__}, "
+                f"got {type(self.task).__name__}"
             )
 
     @property

@@ -42,7 +42,7 @@ from perception.geometry import FloatArray, project_points, range_bearing
 from perception.types import PoleCode
 from perception.vision.cnn_detector import OBJECT_CLASSES, pole_class_name
 from spl_env.robots.nao import NaoRobot, RobotConfig
-from spl_env.scenes.spl_field import SceneBodies, SceneConfig, build_scene
+from spl_env.scenes.spl_field import SceneConfig, SplFieldScene
 from spl_env.sensors.camera import Camera, CameraConfig, EpisodeLighting, LightingRandomisation
 from spl_env.sim.world import BulletWorld
 
@@ -102,7 +102,7 @@ def class_names(codes: tuple[PoleCode, ...]) -> tuple[str, ...]:
 class FrameSampler:
     """One scene (poster draw) with our robot and the others; draws labelled frames.
 
-    The world is built from the envs' modules (:func:`spl_env.scenes.spl_field.build_scene`,
+    The world is built from the envs' modules (:class:`spl_env.scenes.spl_field.SplFieldScene`,
     :class:`spl_env.robots.nao.NaoRobot`, :class:`spl_env.sensors.camera.Camera`). ``rng``
     draws the posters (``scene.scene_seed`` is not used) and, afterwards, every frame. Call
     :meth:`close` when done.
@@ -117,19 +117,18 @@ class FrameSampler:
     ) -> None:
         self.config = config
         self.rng = rng
-        self.scene = scene or SceneConfig()
         self.camera_config = camera or CameraConfig()
         self.world = BulletWorld(time_step_s=0.01)
-        self.bodies: SceneBodies = build_scene(self.world, self.scene, rng)
+        self.field = SplFieldScene(self.world, scene or SceneConfig(), poster_rng=rng)
+        self.scene = self.field.config
         robot_config = RobotConfig()
         self.robot = NaoRobot(self.world, "self", team=0, config=robot_config)
         self.others = [
             NaoRobot(self.world, f"robot_{i}", team=i % 2, config=robot_config)
             for i in range(N_OTHER_ROBOTS)
         ]
-        layout = self.scene.poles
-        self.codes = layout.codes()
-        self.poles = layout.positions(self.scene.dimensions)
+        self.codes = self.field.codes
+        self.poles = self.field.landmarks  # (L, 2), row k is pole self.codes[k]
         self.classes = class_names(self.codes)
         self._class_id = {name: i for i, name in enumerate(self.classes)}
 
@@ -202,7 +201,8 @@ class FrameSampler:
         )
 
     def _place_robots(self) -> int | None:
-        """Place the other robots and ours; returns the id of the pole aimed at, if any."""
+        """Place the other robots and ours; returns the landmark id of the pole aimed at, if
+        any."""
         cfg, rng = self.config, self.rng
         for other in self.others:
             other.place(self._random_pose())
@@ -220,7 +220,7 @@ class FrameSampler:
                 self.robot.place(np.array([xy[0], xy[1], heading]), head=head)
                 if rng.uniform() < cfg.occluder_probability:
                     self._place_occluder(xy, self.poles[i])
-                return i
+                return self.codes[i].landmark_id
         self.robot.place(self._random_pose(), head=head)
         return None
 
@@ -250,7 +250,7 @@ class FrameSampler:
 
     def _place_ball(self, position: FloatArray, rotation: FloatArray) -> None:
         """Ball on the ground in front of the camera or anywhere on the field."""
-        dims, rng = self.scene.dimensions, self.rng
+        rng = self.rng
         if rng.uniform() < self.config.ball_in_front_probability:
             forward = rotation[:2, 0] / max(float(np.linalg.norm(rotation[:2, 0])), 1e-9)
             azimuth = math.atan2(forward[1], forward[0]) + rng.uniform(-0.5, 0.5)
@@ -259,8 +259,7 @@ class FrameSampler:
             )
         else:
             xy = self._random_pose()[:2]
-        radius = dims.ball_diameter_m / 2
-        self.world.set_pose(self.bodies.ball, (xy[0], xy[1], radius), 0.0)
+        self.field.place_ball(xy)
 
     # ----- labels ----------------------------------------------------------------------------
     def _objects(
@@ -279,12 +278,15 @@ class FrameSampler:
         (px: the band junction on the pole axis) and ``keypoint_visible`` (inside the image
         and labelled with the pole).
         """
-        ids: dict[int, tuple[str, int | None]] = {
-            self.world.body(name): (pole_class_name(code), code.landmark_id)
-            for code, name in ((c, self.bodies.poles[c.landmark_id]) for c in self.codes)
+        bodies = self.field.bodies
+        ids: dict[int, tuple[str, int | None]] = {  # body id -> (class, row in poles or None)
+            body: (pole_class_name(code), k)
+            for k, (code, body) in enumerate(
+                zip(self.codes, self.field.pole_body_ids(), strict=True)
+            )
         }
-        ids |= {self.world.body(name): ("goal_post", None) for name in self.bodies.goal_posts}
-        ids[self.world.body(self.bodies.ball)] = ("ball", None)
+        ids |= {self.world.body(name): ("goal_post", None) for name in bodies.goal_posts}
+        ids[self.world.body(bodies.ball)] = ("ball", None)
         ids |= {self.world.body(robot.name): ("robot", None) for robot in self.others}
         rb = range_bearing(self.robot.pose, self.poles)
         present, counts = np.unique(labels, return_counts=True)
@@ -292,7 +294,8 @@ class FrameSampler:
         for body, count in zip(present.tolist(), counts.tolist(), strict=True):
             if body not in ids:
                 continue
-            name, landmark_id = ids[body]
+            name, pole = ids[body]
+            landmark_id = None if pole is None else self.codes[pole].landmark_id
             rows, cols = np.nonzero(labels == body)
             h, w = labels.shape
             record: dict[str, Any] = {
@@ -308,8 +311,8 @@ class FrameSampler:
                 ),
                 "occluded_fraction": None,
             }
-            if landmark_id is not None:
-                record |= self._pole_fields(labels, body, landmark_id, position, rotation, rb)
+            if pole is not None:
+                record |= self._pole_fields(labels, body, pole, position, rotation, rb)
             out.append(record)
         return out
 
@@ -317,19 +320,20 @@ class FrameSampler:
         self,
         labels: NDArray[np.int32],
         body: int,
-        landmark_id: int,
+        pole: int,
         position: FloatArray,
         rotation: FloatArray,
         rb: FloatArray,
     ) -> dict[str, Any]:
-        """Range, bearing, keypoint and occlusion of pole ``landmark_id`` (body id ``body``).
+        """Range, bearing, keypoint and occlusion of the pole in row ``pole`` of ``poles``
+        (body id ``body``).
 
         ``position`` (3,) and ``rotation`` (3, 3) are the true camera pose in the field frame;
-        ``rb`` (6, 2) the true range and bearing of every pole from our robot.
+        ``rb`` (L, 2) the true range and bearing of every pole from our robot.
         """
         model = self.camera_config.model
         geometry = self.scene.poles.geometry
-        xy = self.poles[landmark_id]
+        xy = self.poles[pole]
         junction = np.array([xy[0], xy[1], geometry.base_top_m + geometry.band_height_m])
         [(u, v)], _ = project_points(
             ((junction - position) @ rotation)[None], model.fx, model.fy, model.cx, model.cy
@@ -341,8 +345,8 @@ class FrameSampler:
             and np.any(labels[max(row - 1, 0) : row + 2, col] == body)  # rows may be 1 px off
         )
         return {
-            "range_m": float(rb[landmark_id, 0]),
-            "bearing_rad": float(rb[landmark_id, 1]),
+            "range_m": float(rb[pole, 0]),
+            "bearing_rad": float(rb[pole, 1]),
             "keypoint": [float(u), float(v)],
             "keypoint_visible": keypoint_visible,
             "occluded_fraction": self._occluded_fraction(labels, body, xy, position, rotation),

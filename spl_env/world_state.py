@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
@@ -45,7 +46,7 @@ class WorldState:
         """Our robot's head angles (2,) (rad)."""
         return self.heads[self.agent]
 
-    @property
+    @cached_property
     def others(self) -> NDArray[np.int64]:
         """Indices (R,) of the robots other than ours."""
         return np.array([k for k in range(len(self.names)) if k != self.agent], dtype=np.int64)

@@ -30,19 +30,22 @@ class CnnDetections(Provider):
 
 
 class CnnPoleSightings(Provider):
-    """Seed 000 §3.4: pole sightings from the CNN's pole detections (range from the pole's own
-    ruler in the image, bearing from the box and the head angles)."""
+    """Seed 000 §3.4: pole sightings from the CNN's pole detections scoring at least
+    ``score_threshold`` (range from the pole's own ruler in the image, bearing from the box and
+    the head angles)."""
 
     provides = POLE_SIGHTINGS
     requires = (IMAGE_DETECTIONS, "image", "camera_state")
 
-    def __init__(self, config: CnnDetectorConfig, context: PerceptionContext) -> None:
+    def __init__(
+        self, config: CnnDetectorConfig, score_threshold: float, context: PerceptionContext
+    ) -> None:
         self.detector = context.cnn_detector(config)
+        self.score_threshold = score_threshold
 
     def update(self, inputs: Mapping[str, Any], time_s: float) -> tuple[LandmarkObservation, ...]:
-        found = self.detector.observations(
-            inputs[IMAGE_DETECTIONS], inputs["camera_state"], inputs["image"]
-        )
+        confident = [d for d in inputs[IMAGE_DETECTIONS] if d.score >= self.score_threshold]
+        found = self.detector.observations(confident, inputs["camera_state"], inputs["image"])
         return tuple(found)
 
 

@@ -26,9 +26,8 @@ from numpy.typing import NDArray
 from perception.geometry import FloatArray, wrap_angle
 from perception.pipeline import PerceptionPipeline
 from perception.providers.base import PerceptionContext
-from perception.representations import POLE_SIGHTINGS, PerceptionOutput, Prior
+from perception.representations import POLE_SIGHTINGS, PerceptionOutput
 from perception.types import SensorFrame
-from perception.vision.colour_filter import ColourPoleDetector
 from spl_env.config import SPL_ALIASES, EnvConfig
 from spl_env.envs.info import FULL_INFO_REQUIRES, ground_truth_info, perception_info
 from spl_env.observations.base import EncoderInput, compose_space, encode_all
@@ -36,8 +35,8 @@ from spl_env.overrides import apply_overrides
 from spl_env.rendering import TopDownView, draw_detections, side_by_side
 from spl_env.robots.nao import NaoCommand, NaoRobot
 from spl_env.scenes.spl_field import SplFieldScene
-from spl_env.sensors.emulation.poles import GeometricPoleCamera, GeometricPoleSightings
-from spl_env.sensors.rig import Emulator, NaoRig
+from spl_env.sensors.emulation.registry import emulators_for
+from spl_env.sensors.rig import NaoRig
 from spl_env.sim.placement import Placement
 from spl_env.sim.world import BulletWorld
 from spl_env.tasks.base import Task, TaskContext
@@ -91,25 +90,41 @@ class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
                 robot=cfg.robot,
                 control_dt_s=cfg.control_dt_s,
                 n_landmarks=len(self.scene.codes),
+                placement=self.placement,
             ),
         )
         self.encoders = self.task.encoders()
         self.observation_space = compose_space(self.encoders)
-        self.action_space = self.task.action_space
-        emulators = self._emulators()
+        self._action_box = self.task.action_space
+        self.action_space = self._action_box
+        emulators = emulators_for(self.scene, cfg.sensors, cfg.perception)
         outputs = {name for encoder in self.encoders for name in encoder.requires}
         outputs |= set(self.task.reward_requires())
         if cfg.info_level == "full":
             outputs |= set(FULL_INFO_REQUIRES)
-        self.pipeline = PerceptionPipeline(
-            cfg.perception,
-            PerceptionContext(cfg.sensors.camera.model, self.scene.codes, cfg.scene.poles.geometry),
-            outputs=sorted(outputs),
-            emulated=tuple(emulators),
+        self.perception_context = PerceptionContext(
+            cfg.sensors.camera.model, self.scene.codes, cfg.scene.poles.geometry
         )
-        self.rig = NaoRig(cfg.sensors, self.robots[AGENT], emulators)
-        self._render_image = cfg.sensors.camera_mode == "rendered" and (
-            "image" in self.pipeline.frame_inputs
+        self.pipeline = PerceptionPipeline(
+            cfg.perception, self.perception_context, sorted(outputs), emulated=tuple(emulators)
+        )
+        rendered = cfg.sensors.camera_mode == "rendered"
+        if not rendered and "image" in self.pipeline.frame_inputs:
+            readers = [
+                name
+                for name in self.pipeline.representations
+                if "image" in self.pipeline.provider(name).requires
+            ]
+            raise ValueError(
+                "camera_mode='geometric' renders no image, but the providers of "
+                f"{readers} read images and have no emulator; the geometric mode emulates "
+                "the colour front end: pass frontend='colour' with it (or camera_mode='rendered')"
+            )
+        self._render_image = rendered and "image" in self.pipeline.frame_inputs
+        self.rig = NaoRig(
+            cfg.sensors,
+            self.robots[AGENT],
+            {name: emulators[name] for name in self.pipeline.emulated},
         )
         self._top_down = TopDownView(self.scene.dimensions)
         self._initial_state = self.world.save_state()
@@ -117,28 +132,13 @@ class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
         self._frame: SensorFrame | None = None
         self._output: PerceptionOutput | None = None
         self._blocked = np.zeros(len(self.robots), dtype=bool)
+        self._names = tuple(r.name for r in self.robots)
+        self._teams = np.array([r.team for r in self.robots], dtype=np.int64)
+        self.camera_yaw_rate_rps = 0.0  # our camera's turn rate in the last step (rad/s)
         self._time_s = 0.0
         self._steps = 0
         self._closed = False
         self.step_times: dict[str, float] = {}  # wall-clock seconds of the last step's parts
-
-    def _emulators(self) -> dict[str, Emulator]:
-        """The geometric camera mode's emulators: pole sightings for the colour front end."""
-        cfg = self.config
-        if cfg.sensors.camera_mode != "geometric" or cfg.perception.pole_sightings != "colour":
-            return {}
-        scene, model = self.scene, cfg.sensors.camera.model
-        geometry = cfg.scene.poles.geometry
-        camera = GeometricPoleCamera(
-            cfg.sensors.geometric_camera,
-            model,
-            geometry,
-            scene.landmarks,
-            tuple(int(i) for i in scene.landmark_ids),
-            scene.pole_body_ids(),
-        )
-        detector = ColourPoleDetector(cfg.perception.colour_filter, model, scene.codes, geometry)
-        return {POLE_SIGHTINGS: GeometricPoleSightings(camera, detector)}
 
     # ----- gymnasium API ------------------------------------------------------------------
     def reset(
@@ -154,11 +154,12 @@ class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
         prior = start + rng.normal(0.0, self.config.perception.slam.initial_pose_std)
         ours, others = self.robots[AGENT], self.robots[AGENT + 1 :]
         ours.place(start)
-        ball = self.task.place_scripted(rng, others, self.placement, [ours])
+        ball = self.task.place_scripted(rng, others, [ours])
         self.scene.place_ball(ball)
         self.rig.reset(rng)
-        self.pipeline.reset(Prior(pose=prior, rng=rng))
+        self.pipeline.reset(prior, rng)
         self._state = self._world_state()
+        self.camera_yaw_rate_rps = 0.0
         times = self._sense(np.zeros(3), yaw_rate_rps=0.0, physics_s=0.0)
         return self._observation(), self._info(
             self.task.reward_terms(*self._truth_and_belief()), times
@@ -180,8 +181,10 @@ class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
         self._time_s += self.config.control_dt_s
         self._state = self._world_state()
         yaw_rate = float(wrap_angle(ours.pose[2] + ours.head[0] - yaw_before))
-        yaw_rate /= self.config.control_dt_s
-        times = self._sense(engine_delta, yaw_rate, physics_s=time.perf_counter() - t0)
+        self.camera_yaw_rate_rps = yaw_rate / self.config.control_dt_s
+        times = self._sense(
+            engine_delta, self.camera_yaw_rate_rps, physics_s=time.perf_counter() - t0
+        )
         self._steps += 1
         terms = self.task.reward_terms(*self._truth_and_belief())
         terminated = self.task.terminated(*self._truth_and_belief())
@@ -201,7 +204,7 @@ class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
             return None
         state, frame, output = self._current()
         top = self._top_down.draw(state, output, self.scene.codes)
-        image = frame.image if frame.image is not None else self.rig.camera_view(self.world)
+        image = frame.image if frame.image is not None else self.rig.camera_view(self.world)[0]
         sightings = output.get(POLE_SIGHTINGS, ())
         return side_by_side(top, draw_detections(image, sightings))
 
@@ -229,7 +232,7 @@ class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
     # ----- pieces -------------------------------------------------------------------------
     def _checked_action(self, action: np.ndarray) -> FloatArray:
         """``action`` as float64, or ValueError: wrong shape, not finite, outside the space."""
-        space = self.task.action_space
+        space = self._action_box
         a = np.asarray(action, dtype=np.float64)
         if a.shape != space.shape:
             raise ValueError(f"action must have shape {space.shape}, got {a.shape}")
@@ -281,8 +284,7 @@ class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
         self._output = self.pipeline.step(self._frame)
         self.step_times = {
             "physics": physics_s,
-            "render": sensed.render,
-            "sensors": sensed.sensors,
+            **sensed,
             "perception": time.perf_counter() - t0,
         }
         return self.step_times
@@ -292,17 +294,17 @@ class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
         ball, ball_velocity = self.scene.ball_state()
         return WorldState(
             time_s=self._time_s,
-            names=tuple(r.name for r in self.robots),
+            names=self._names,
             kinds=tuple("nao" for _ in self.robots),
-            teams=np.array([r.team for r in self.robots], dtype=np.int64),
+            teams=self._teams,
             poses=np.array([r.pose for r in self.robots]),
             heads=np.array([r.head for r in self.robots]),
             blocked=self._blocked.copy(),
             agent=AGENT,
             ball=ball,
             ball_velocity=ball_velocity,
-            landmarks=self.scene.landmarks.copy(),
-            landmark_ids=self.scene.landmark_ids.copy(),
+            landmarks=self.scene.landmarks,
+            landmark_ids=self.scene.landmark_ids,
         )
 
     def _current(self) -> tuple[WorldState, SensorFrame, PerceptionOutput]:

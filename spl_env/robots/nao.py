@@ -19,6 +19,7 @@ import numpy as np
 
 from perception.geometry import FloatArray, camera_rotation, compose, rot_x, rot_y, rot_z
 from perception.types import CameraState
+from perception.validation import check_positive
 from spl_env.sim.world import BulletWorld, LinkSpec, VisualPart
 
 NAO_GREY = (0.82, 0.82, 0.84, 1.0)
@@ -64,9 +65,7 @@ class RobotConfig:
             "kick_half_width_m",
             "kick_speed_mps",
         ):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"RobotConfig.{name} must be finite and > 0, got {value}")
+            check_positive("RobotConfig", name, getattr(self, name))
         if not self.head_yaw_limit_rad <= math.pi:
             raise ValueError(
                 f"RobotConfig.head_yaw_limit_rad must be <= pi, got {self.head_yaw_limit_rad}"

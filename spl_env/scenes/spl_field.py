@@ -17,6 +17,7 @@ import numpy as np
 
 from perception.geometry import FloatArray
 from perception.types import PoleCode, PoleGeometry
+from perception.validation import check_in_interval, check_int, check_positive
 from spl_env.field import FieldDimensions, PoleLayout
 from spl_env.sim.world import MAX_PARTS_PER_BODY, BulletWorld, VisualPart
 
@@ -52,10 +53,13 @@ class SceneConfig:
     scene_seed: int = 0  # picks the posters when the world is built
 
     def __post_init__(self) -> None:
+        owner = "SceneConfig"
         for name in ("board_distance_m", "board_height_m", "board_panel_width_m", "ball_mass_kg"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"SceneConfig.{name} must be finite and > 0, got {value}")
+            check_positive(owner, name, getattr(self, name))
+        check_in_interval(
+            owner, "ball_rolling_friction", self.ball_rolling_friction, 0.0, 1.0, low_inclusive=True
+        )
+        check_int(owner, "scene_seed", self.scene_seed, 0)
         carpet_l = self.dimensions.carpet_size_m[0]
         r = self.poles.geometry.radius_m
         if self.poles.offset_outside_m + r > self.dimensions.border_strip_m:
@@ -67,13 +71,6 @@ class SceneConfig:
             raise ValueError(
                 f"SceneConfig.poles.x_positions_m must lie on the carpet (|x| + radius <= "
                 f"{carpet_l / 2} m), got {self.poles.x_positions_m}"
-            )
-        if not isinstance(self.scene_seed, int) or self.scene_seed < 0:
-            raise ValueError(f"SceneConfig.scene_seed must be an int >= 0, got {self.scene_seed!r}")
-        if not (0.0 <= self.ball_rolling_friction < 1.0):
-            raise ValueError(
-                "SceneConfig.ball_rolling_friction must be in [0, 1), "
-                f"got {self.ball_rolling_friction}"
             )
 
 
@@ -268,18 +265,27 @@ def _add_boards(world: BulletWorld, config: SceneConfig, rng: np.random.Generato
 
 
 class SplFieldScene:
-    """The SPL field in ``world``, built once from ``config`` (posters drawn from
-    ``config.scene_seed``), with its ground truth.
+    """The SPL field in ``world``, built once from ``config``, with its ground truth.
 
-    ``codes`` (L,) are the poles' colour codes, ``landmark_ids`` (L,) and ``landmarks`` (L, 2)
-    their ids and field positions (m); ``obstacles`` (K, 3) the goal posts and poles as
-    ``(x, y, radius)`` circles (m) that robots walk around; ``bodies`` names the bodies.
+    The posters are drawn from ``poster_rng``, by default a generator seeded with
+    ``config.scene_seed`` (the dataset generator and benchmarks pass their own, so that one
+    seeded stream draws the posters and then every frame). ``codes`` (L,) are the poles' colour
+    codes, ``landmark_ids`` (L,) and ``landmarks`` (L, 2) their ids and field positions (m);
+    ``obstacles`` (K, 3) the goal posts and poles as ``(x, y, radius)`` circles (m) that robots
+    walk around; ``bodies`` names the bodies.
     """
 
-    def __init__(self, world: BulletWorld, config: SceneConfig) -> None:
+    def __init__(
+        self,
+        world: BulletWorld,
+        config: SceneConfig,
+        poster_rng: np.random.Generator | None = None,
+    ) -> None:
         self.config = config
         self.world = world
-        self.bodies = build_scene(world, config, np.random.default_rng(config.scene_seed))
+        if poster_rng is None:
+            poster_rng = np.random.default_rng(config.scene_seed)
+        self.bodies = build_scene(world, config, poster_rng)
         self.codes: tuple[PoleCode, ...] = config.poles.codes() if config.poles_enabled else ()
         positions = config.poles.positions(config.dimensions)
         self.landmark_ids = np.array([c.landmark_id for c in self.codes], dtype=np.int64)

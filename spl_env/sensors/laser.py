@@ -8,8 +8,6 @@ max-range value.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -18,50 +16,29 @@ from perception.sensor_models import LaserModel
 from spl_env.sensors.raycast import RayCaster, cast, fan_rays
 
 
-@dataclass(frozen=True, kw_only=True)
-class LaserConfig:
-    """Beam layout, range and noise of the laser (defaults: seed 001's Hokuyo UST-30LX set-up).
+class LaserConfig(LaserModel):
+    """Beam layout, range and noise of the simulated laser: exactly a
+    :class:`perception.sensor_models.LaserModel` (defaults: seed 001's Hokuyo UST-30LX set-up),
+    which validates the fields (``ValueError`` naming ``laser.<field>``).
 
-    The fields are those of :class:`perception.sensor_models.LaserModel`, which validates them
-    (``ValueError`` naming the field) and which :attr:`model` builds.
+    The simulation adds no setting of its own; the subclass only gives the env config's
+    ``sensors.laser`` field its name. Any ``LaserModel`` configures a :class:`Laser`.
     """
-
-    n_beams: int = 180  # beams, evenly spaced over the field of view
-    fov_deg: float = 180.0  # field of view, centred on the robot's heading
-    min_range_m: float = 0.1  # nearer returns are dropped (seed 001's accuracy spec: 0.1-10 m)
-    max_range_m: float = 10.0  # beams reach this far
-    range_noise_std_m: float = 0.02  # Gaussian range noise (seed 001)
-    mount_height_m: float = 0.30  # scan plane above the ground (on top of a Pioneer 3-DX)
-    mount_x_m: float = 0.0  # scanner centre ahead of the robot origin
-
-    def __post_init__(self) -> None:
-        _ = self.model  # building the model validates the fields
-
-    @property
-    def model(self) -> LaserModel:
-        """The laser's geometry and noise, as perception interprets its scans."""
-        return LaserModel(
-            n_beams=self.n_beams,
-            fov_deg=self.fov_deg,
-            min_range_m=self.min_range_m,
-            max_range_m=self.max_range_m,
-            range_noise_std_m=self.range_noise_std_m,
-            mount_x_m=self.mount_x_m,
-            mount_height_m=self.mount_height_m,
-        )
 
 
 class Laser:
-    """Ray-cast planar laser scanner; ``model`` is the geometry and noise it scans with."""
+    """Ray-cast planar laser scanner; ``model`` (its config) is the geometry and noise it scans
+    with."""
 
-    def __init__(self, config: LaserConfig) -> None:
+    def __init__(self, config: LaserModel) -> None:
         self.config = config
-        self.model = config.model
-        self._angles = self.model.beam_angles()
+        self.model: LaserModel = config
+        self._angles = config.beam_angles()  # cached for the rays of every scan
 
     def beam_angles(self) -> FloatArray:
-        """Beam directions (n_beams,) in the robot frame (rad, 0 = forward, + = left)."""
-        return self._angles.copy()
+        """Beam directions (n_beams,) in the robot frame (rad, 0 = forward, + = left): the
+        model's :meth:`~perception.sensor_models.LaserModel.beam_angles`."""
+        return self.model.beam_angles()
 
     def rays(self, robot_pose: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Field-frame beam (starts, ends), each (n_beams, 3) (m), for the (3,) field pose."""

@@ -3,8 +3,9 @@
 :class:`NaoRig` turns the world's ground truth into a :class:`perception.types.SensorFrame`.
 Every robot in the world can carry one; an env senses with the rigs of the robots whose
 perception it runs. In the geometric camera mode nothing is rendered: the rig's emulators
-(:mod:`spl_env.sensors.emulation`) deliver their representations instead. Every random draw
-uses the generator handed to :meth:`NaoRig.sense`.
+(:mod:`spl_env.sensors.emulation`) deliver their representations instead. The walk odometry
+draws from the generator handed to :meth:`NaoRig.reset`, everything else from the one handed to
+:meth:`NaoRig.sense` (the env passes its episode generator to both).
 """
 
 from __future__ import annotations
@@ -56,8 +57,6 @@ class RigConfig:
 class Emulator(Protocol):
     """Produces one representation from the true camera pose, without rendering."""
 
-    provides: str
-
     def observe(
         self,
         world: BulletWorld,
@@ -68,14 +67,6 @@ class Emulator(Protocol):
     ) -> Any:
         """The representation for this frame; ``blur_px`` is the frame's motion blur (px)."""
         ...
-
-
-@dataclass(frozen=True)
-class SenseTimes:
-    """Seconds one :meth:`NaoRig.sense` spent rendering (or emulating) and in the other sensors."""
-
-    render: float
-    sensors: float
 
 
 class NaoRig:
@@ -120,12 +111,13 @@ class NaoRig:
         *,
         render: bool,
         truth: GroundTruth | None = None,
-    ) -> tuple[SensorFrame, SenseTimes]:
+    ) -> tuple[SensorFrame, dict[str, float]]:
         """This step's frame: the image (when ``render``) or the emulated representations,
         sonar, laser and the odometry of the walk engine's increment ``engine_delta`` (3,).
 
         ``yaw_rate_rps`` is the camera's turn rate this frame (rad/s), for motion blur;
-        ``truth`` is passed on for oracle providers.
+        ``truth`` is passed on for oracle providers. Also returns the seconds spent rendering
+        (or emulating), ``"render"``, and in the other sensors, ``"sensors"``.
         """
         t0 = time.perf_counter()
         robot, cam = self.robot, self.config.camera
@@ -166,12 +158,12 @@ class NaoRig:
             emulated=emulated,
             truth=truth,
         )
-        return frame, SenseTimes(render=t1 - t0, sensors=time.perf_counter() - t1)
+        return frame, {"render": t1 - t0, "sensors": time.perf_counter() - t1}
 
-    def camera_view(self, world: BulletWorld) -> NDArray[np.uint8]:
-        """A noise-free render of what the camera sees now, (H, W, 3) uint8 RGB: for pictures in
-        the geometric camera mode, which renders nothing while stepping."""
+    def camera_view(self, world: BulletWorld) -> tuple[NDArray[np.uint8], NDArray[np.int32]]:
+        """A noise-free render of what the camera sees now under the episode's lighting:
+        (H, W, 3) uint8 RGB and (H, W) body-id labels; for pictures (the geometric camera mode
+        renders nothing while stepping) and ground-truth labels."""
         position, rotation = self.robot.camera_pose_world()
         quiet = Camera(dataclasses.replace(self.config.camera, noise_std=0.0))
-        image, _ = quiet.render(world, position, rotation, self.lighting, np.random.default_rng(0))
-        return image
+        return quiet.render(world, position, rotation, self.lighting, np.random.default_rng(0))

@@ -23,73 +23,42 @@ from numpy.typing import ArrayLike, NDArray
 
 from perception.geometry import FloatArray
 from perception.sensor_models import N_SONAR_SECTORS, SonarModel
+from perception.validation import check_in_interval, check_int
 from spl_env.sensors.raycast import RayCaster, cast, fan_rays
 
 
 @dataclass(frozen=True, kw_only=True)
-class SonarConfig:
-    """Geometry and noise of the Nao chest sonar.
+class SonarConfig(SonarModel):
+    """Geometry and noise of the simulated Nao chest sonar.
 
-    All fields but ``rays_per_sector`` and ``dropout_probability`` are those of
-    :class:`perception.sensor_models.SonarModel`, which validates them (``ValueError`` naming
-    the field) and which :attr:`model` builds.
+    A :class:`perception.sensor_models.SonarModel` (defaults: the Nao's sonar with seed 004's
+    three sectors), which validates its fields (``ValueError`` naming ``sonar.<field>``), plus
+    two settings of the simulation's own: how finely each sector's cone is sampled and how often
+    an echo is lost.
     """
 
-    mount_height_m: float = 0.30  # transducers on the chest, above the ground
-    mount_x_m: float = 0.05  # ahead of the robot origin (Nao: 0.048-0.054 m ahead of the torso)
-    min_range_m: float = 0.25  # no distance below this (Nao spec, seed 004)
-    max_range_m: float = 2.55  # nothing heard beyond this (Nao spec, seed 004)
-    sector_centres_deg: tuple[float, float, float] = (25.0, 0.0, -25.0)  # left, middle, right
-    sector_widths_deg: tuple[float, float, float] = (60.0, 40.0, 60.0)  # 60° cones; middle ~40°
     rays_per_sector: int = 31  # rays fanned evenly over each sector's width
-    max_echoes: int = 10  # echoes reported per sector, nearest first (NAOqi: 10)
-    echo_merge_m: float = 0.05  # echoes closer than this merge into one (seed 004: 5 cm)
-    range_noise_std_m: float = 0.01  # Gaussian noise on each echo's distance (Nao: 1 cm resolution)
     dropout_probability: float = 0.02  # chance that an echo is lost
 
     def __post_init__(self) -> None:
-        _ = self.model  # building the model validates the fields it shares
-        if (
-            not isinstance(self.rays_per_sector, int)
-            or isinstance(self.rays_per_sector, bool)
-            or self.rays_per_sector < 1
-        ):
-            raise ValueError(
-                f"sonar.rays_per_sector must be an int >= 1, got {self.rays_per_sector!r}"
-            )
-        if not (0.0 <= self.dropout_probability < 1.0):
-            raise ValueError(
-                f"sonar.dropout_probability must be in [0, 1), got {self.dropout_probability}"
-            )
-
-    @property
-    def model(self) -> SonarModel:
-        """The sonar's geometry and noise, as perception interprets its echoes (the rays per
-        sector and the dropout are the simulation's own)."""
-        return SonarModel(
-            sector_centres_deg=self.sector_centres_deg,
-            sector_widths_deg=self.sector_widths_deg,
-            min_range_m=self.min_range_m,
-            max_range_m=self.max_range_m,
-            max_echoes=self.max_echoes,
-            echo_merge_m=self.echo_merge_m,
-            range_noise_std_m=self.range_noise_std_m,
-            mount_x_m=self.mount_x_m,
-            mount_height_m=self.mount_height_m,
+        super().__post_init__()
+        check_int("sonar", "rays_per_sector", self.rays_per_sector, 1)
+        check_in_interval(
+            "sonar", "dropout_probability", self.dropout_probability, 0.0, 1.0, low_inclusive=True
         )
 
 
 class Sonar:
     """Ray-cast model of the Nao sonar, reporting echo distances per left/middle/right sector;
-    ``model`` is the geometry and noise it hears with."""
+    ``model`` (its config) is the geometry and noise it hears with."""
 
     def __init__(self, config: SonarConfig) -> None:
         self.config = config
-        self.model = config.model
+        self.model: SonarModel = config
         n = config.rays_per_sector
         offsets = np.linspace(-0.5, 0.5, n) if n > 1 else np.zeros(1)
-        centres = self.model.sector_centres_rad()[:, None]
-        widths = self.model.sector_widths_rad()[:, None]
+        centres = config.sector_centres_rad()[:, None]
+        widths = config.sector_widths_rad()[:, None]
         self._angles = (centres + widths * offsets).ravel()
 
     def ray_angles(self) -> FloatArray:

@@ -40,20 +40,24 @@ class Placement:
         d = np.hypot(self.obstacles[:, 0] - xy[0], self.obstacles[:, 1] - xy[1])
         return bool(np.any(d < r + self.obstacles[:, 2] + clearance))
 
+    def random_pose(self, rng: np.random.Generator, margin_m: float) -> FloatArray:
+        """A pose (3,) drawn uniformly inside the field lines shrunk by ``margin_m`` (m), any
+        heading."""
+        dims = self.dimensions
+        return np.array(
+            [
+                rng.uniform(-dims.half_length_m + margin_m, dims.half_length_m - margin_m),
+                rng.uniform(-dims.half_width_m + margin_m, dims.half_width_m - margin_m),
+                rng.uniform(-math.pi, math.pi),
+            ]
+        )
+
     def free_pose(
         self, rng: np.random.Generator, placed: Sequence[NaoRobot], margin_m: float = 0.5
     ) -> FloatArray:
-        """A random pose (3,) inside the field shrunk by ``margin_m``, clear of the ``placed``
-        robots (by 0.3 m), posts and poles."""
-        dims = self.dimensions
+        """A :meth:`random_pose` clear of the ``placed`` robots (by 0.3 m), posts and poles."""
         for _ in range(200):
-            pose = np.array(
-                [
-                    rng.uniform(-dims.half_length_m + margin_m, dims.half_length_m - margin_m),
-                    rng.uniform(-dims.half_width_m + margin_m, dims.half_width_m - margin_m),
-                    rng.uniform(-math.pi, math.pi),
-                ]
-            )
+            pose = self.random_pose(rng, margin_m)
             if not self.collides(pose[:2], placed, clearance=0.3):
                 return pose
         raise RuntimeError("could not place a robot: the field is too crowded")

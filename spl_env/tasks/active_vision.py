@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from perception.geometry import FloatArray
+from perception.validation import check_choice, check_positive
 from spl_env.behaviours import WalkerConfig, WaypointWalker
 from spl_env.tasks.base import TaskContext
 from spl_env.tasks.head_control import HeadControlTask, HeadControlTaskConfig
@@ -26,16 +26,9 @@ class ActiveVisionTaskConfig(HeadControlTaskConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if self.body_behaviour not in BODY_BEHAVIOURS:
-            raise ValueError(
-                f"ActiveVisionTaskConfig.body_behaviour must be one of {BODY_BEHAVIOURS}, "
-                f"got {self.body_behaviour!r}"
-            )
-        if not (math.isfinite(self.square_side_m) and 0 < self.square_side_m <= 5.0):
-            raise ValueError(
-                "ActiveVisionTaskConfig.square_side_m must be in (0, 5] m, "
-                f"got {self.square_side_m}"
-            )
+        owner = "ActiveVisionTaskConfig"
+        check_choice(owner, "body_behaviour", self.body_behaviour, BODY_BEHAVIOURS)
+        check_positive(owner, "square_side_m", self.square_side_m, upper=5.0, upper_inclusive=True)
 
 
 class ActiveVisionTask(HeadControlTask):
@@ -57,7 +50,7 @@ class ActiveVisionTask(HeadControlTask):
             waypoints = centre + np.array([[h, -h], [h, h], [-h, h], [-h, -h]])
             start = np.array([*waypoints[3], 0.0])
         else:
-            start = self.random_field_pose(rng)
+            start = self.context.placement.random_pose(rng, margin_m=1.0)
         self._walker = WaypointWalker(
             self.config.walker, self.context.dimensions, rng, waypoints=waypoints
         )

@@ -8,7 +8,6 @@ physics, sensing, perception, observation, info.
 
 from __future__ import annotations
 
-import math
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -18,12 +17,15 @@ from gymnasium import spaces
 
 from perception.geometry import FloatArray
 from perception.representations import PerceptionOutput
+from perception.validation import check_int, check_positive
 from spl_env.behaviours import WalkerConfig, WanderingRobots
 from spl_env.field import FieldDimensions
 from spl_env.observations.base import ObservationEncoder
 from spl_env.robots.nao import NaoCommand, NaoRobot, RobotConfig
 from spl_env.sim.placement import Placement
 from spl_env.world_state import WorldState
+
+MAX_OTHER_ROBOTS = 9  # scripted robots that may share the field with ours
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -35,27 +37,25 @@ class TaskConfig:
     other_walker: WalkerConfig = field(default_factory=WalkerConfig)
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.episode_s) and self.episode_s > 0):
-            raise ValueError(f"TaskConfig.episode_s must be finite and > 0, got {self.episode_s}")
-        if (
-            not isinstance(self.n_other_robots, int)
-            or isinstance(self.n_other_robots, bool)
-            or not 0 <= self.n_other_robots <= 9
-        ):
+        check_positive("TaskConfig", "episode_s", self.episode_s)
+        check_int("TaskConfig", "n_other_robots", self.n_other_robots)
+        if not 0 <= self.n_other_robots <= MAX_OTHER_ROBOTS:
             raise ValueError(
-                f"TaskConfig.n_other_robots must be an int in [0, 9], got {self.n_other_robots!r}"
+                f"TaskConfig.n_other_robots must be an int in [0, {MAX_OTHER_ROBOTS}], "
+                f"got {self.n_other_robots!r}"
             )
 
 
 @dataclass(frozen=True, kw_only=True)
 class TaskContext:
     """What a task is built from: the field, our robot's body, the control rate, the number of
-    mapped poles."""
+    mapped poles and the placement rules (free poses, collisions) of the env's world."""
 
     dimensions: FieldDimensions
     robot: RobotConfig
     control_dt_s: float
     n_landmarks: int
+    placement: Placement
 
 
 class Task(ABC):
@@ -92,12 +92,11 @@ class Task(ABC):
         self,
         rng: np.random.Generator,
         others: Sequence[NaoRobot],
-        placement: Placement,
         placed: list[NaoRobot],
     ) -> FloatArray:
         """Place the scripted robots ``others`` clear of the ``placed`` ones; returns the ball's
         start position (2,). Default: wanderers anywhere, the ball within ±2 m x ±1.5 m."""
-        self.wanderers.reset(rng, others, placement, placed)
+        self.wanderers.reset(rng, others, self.context.placement, placed)
         return np.array([rng.uniform(-2.0, 2.0), rng.uniform(-1.5, 1.5)])
 
     @abstractmethod

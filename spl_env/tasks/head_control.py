@@ -18,6 +18,7 @@ from gymnasium import spaces
 from perception.geometry import FloatArray
 from perception.representations import SELF_POSE, PerceptionOutput
 from perception.types import SlamEstimate
+from perception.validation import check_positive
 from spl_env.observations.base import ObservationEncoder
 from spl_env.observations.body import EpisodeClockEncoder, HeadEncoder, SonarEncoder
 from spl_env.observations.poles import PoleMapEncoder
@@ -37,11 +38,7 @@ class HeadControlTaskConfig(TaskConfig):
     def __post_init__(self) -> None:
         super().__post_init__()
         for name in ("error_weight", "uncertainty_weight"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0):
-                raise ValueError(
-                    f"{type(self).__name__}.{name} must be finite and >= 0, got {value}"
-                )
+            check_positive(type(self).__name__, name, getattr(self, name), allow_zero=True)
 
 
 class HeadControlTask(Task):
@@ -83,14 +80,3 @@ class HeadControlTask(Task):
             "position_error": -self.config.error_weight * error,
             "uncertainty": -self.config.uncertainty_weight * std,
         }
-
-    def random_field_pose(self, rng: np.random.Generator, margin_m: float = 1.0) -> FloatArray:
-        """A pose (3,) drawn uniformly inside the field shrunk by ``margin_m``, any heading."""
-        dims = self.context.dimensions
-        return np.array(
-            [
-                rng.uniform(-dims.half_length_m + margin_m, dims.half_length_m - margin_m),
-                rng.uniform(-dims.half_width_m + margin_m, dims.half_width_m - margin_m),
-                rng.uniform(-math.pi, math.pi),
-            ]
-        )

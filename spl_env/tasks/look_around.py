@@ -14,7 +14,7 @@ class LookAroundTask(HeadControlTask):
     walks; the other robots walk about."""
 
     def start_pose(self, rng: np.random.Generator) -> FloatArray:
-        return self.random_field_pose(rng)
+        return self.context.placement.random_pose(rng, margin_m=1.0)
 
     def walk(self, state: WorldState) -> FloatArray:
         return np.zeros(3)

@@ -218,7 +218,7 @@ def test_reset_with_the_same_seed_repeats_the_draws() -> None:
             context(),
             outputs=[SELF_POSE, POLE_SIGHTINGS],
         )
-        pipeline.reset(Prior(pose=np.zeros(3), rng=np.random.default_rng(seed)))
+        pipeline.reset(np.zeros(3), np.random.default_rng(seed))
         frame = SensorFrame(time_s=0.0, camera_state=camera(0.0), truth=truth_of(POLES))
         for _ in range(5):
             result = pipeline.step(frame)
@@ -239,6 +239,6 @@ def test_oracle_pipeline_reads_only_truth_and_camera_state() -> None:
         outputs=[SELF_POSE, POLE_SIGHTINGS],
     )
     assert pipeline.frame_inputs == frozenset({"truth", "camera_state"})
-    pipeline.reset(Prior(pose=np.zeros(3)))
+    pipeline.reset(np.zeros(3), np.random.default_rng(0))
     with pytest.raises(ValueError, match="truth"):
         pipeline.step(SensorFrame(time_s=0.0, camera_state=camera(0.0)))

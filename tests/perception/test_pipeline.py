@@ -81,7 +81,7 @@ def test_odometry_pose_alone_builds_one_provider_reading_only_odometry() -> None
         with pytest.raises(KeyError):
             pipeline.provider(absent)
     # a frame with nothing but odometry is enough (no camera, no image)
-    pipeline.reset(Prior(pose=np.zeros(3)))
+    pipeline.reset(np.zeros(3), np.random.default_rng(0))
     out = pipeline.step(SensorFrame(time_s=0.1, odometry_delta=np.array([0.1, 0.0, 0.0])))
     assert set(out) == {ODOMETRY_POSE}
 
@@ -117,7 +117,7 @@ def test_oracle_sightings_read_truth_and_camera_state_only() -> None:
 def test_colour_pipeline_steps_on_an_empty_image() -> None:
     cfg = PipelineConfig(pole_sightings="colour")
     pipeline = PerceptionPipeline(cfg, context(), outputs=[POLE_SIGHTINGS, POLE_LAST_SEEN])
-    pipeline.reset(Prior(pose=np.zeros(3)))
+    pipeline.reset(np.zeros(3), np.random.default_rng(0))
     out = pipeline.step(SensorFrame(time_s=0.1, image=blank_image(), camera_state=CAMERA_STATE))
     assert out[POLE_SIGHTINGS] == ()
     assert out[POLE_LAST_SEEN] == {}
@@ -133,7 +133,7 @@ def test_emulated_sightings_come_from_the_frame_and_build_no_pole_provider() -> 
         pipeline.provider(POLE_SIGHTINGS)
     assert IMAGE_DETECTIONS not in pipeline.representations
     assert pipeline.frame_inputs == frozenset({"odometry_delta"})  # no image, no camera state
-    pipeline.reset(Prior(pose=np.zeros(3)))
+    pipeline.reset(np.zeros(3), np.random.default_rng(0))
     emulated = (sighting(2, 2.0, 0.3),)
     frame = SensorFrame(
         time_s=0.5,
@@ -150,7 +150,7 @@ def test_missing_emulated_representation_raises() -> None:
     pipeline = PerceptionPipeline(
         PipelineConfig(), context(), outputs=[POLE_LAST_SEEN], emulated=[POLE_SIGHTINGS]
     )
-    pipeline.reset(Prior(pose=np.zeros(3)))
+    pipeline.reset(np.zeros(3), np.random.default_rng(0))
     with pytest.raises(ValueError, match=POLE_SIGHTINGS):
         pipeline.step(SensorFrame(time_s=0.1))
 
@@ -158,7 +158,7 @@ def test_missing_emulated_representation_raises() -> None:
 # ----- errors ----------------------------------------------------------------------------------
 def test_missing_frame_input_raises_naming_it() -> None:
     pipeline = PerceptionPipeline(PipelineConfig(), context(), outputs=[ODOMETRY_POSE])
-    pipeline.reset(Prior(pose=np.zeros(3)))
+    pipeline.reset(np.zeros(3), np.random.default_rng(0))
     with pytest.raises(ValueError, match="odometry_delta"):
         pipeline.step(SensorFrame(time_s=0.1, camera_state=CAMERA_STATE))
 
@@ -166,7 +166,7 @@ def test_missing_frame_input_raises_naming_it() -> None:
 def test_missing_image_raises_naming_it() -> None:
     cfg = PipelineConfig(pole_sightings="colour")
     pipeline = PerceptionPipeline(cfg, context(), outputs=[POLE_SIGHTINGS])
-    pipeline.reset(Prior(pose=np.zeros(3)))
+    pipeline.reset(np.zeros(3), np.random.default_rng(0))
     with pytest.raises(ValueError, match="image"):
         pipeline.step(SensorFrame(time_s=0.1, camera_state=CAMERA_STATE))
 
@@ -197,7 +197,7 @@ def test_dead_reckoning_walks_a_known_square() -> None:
     """Four times: 1 m forward while turning a quarter turn left (the increment is the pose of
     the new frame in the old one), from (2, -1, 0): the corners of a unit square, back home."""
     pipeline = PerceptionPipeline(PipelineConfig(), context(), outputs=[ODOMETRY_POSE])
-    pipeline.reset(Prior(pose=np.array([2.0, -1.0, 0.0])))
+    pipeline.reset(np.array([2.0, -1.0, 0.0]), np.random.default_rng(0))
     corners = [(3.0, -1.0, math.pi / 2), (3.0, 0.0, -math.pi), (2.0, 0.0, -math.pi / 2)]
     corners.append((2.0, -1.0, 0.0))
     for k, corner in enumerate(corners):
@@ -211,7 +211,7 @@ def test_dead_reckoning_sidestep_after_a_turn_and_reset() -> None:
     """A half turn in place, then 0.5 m to the robot's left: (1, 1, 0) -> (1, 0.5, pi)."""
     pipeline = PerceptionPipeline(PipelineConfig(), context(), outputs=[ODOMETRY_POSE])
     for _ in range(2):  # reset starts over from the prior
-        pipeline.reset(Prior(pose=np.array([1.0, 1.0, 0.0])))
+        pipeline.reset(np.array([1.0, 1.0, 0.0]), np.random.default_rng(0))
         pipeline.step(SensorFrame(time_s=0.1, odometry_delta=np.array([0.0, 0.0, math.pi])))
         pose = pipeline.step(SensorFrame(time_s=0.2, odometry_delta=np.array([0.0, 0.5, 0.0])))[
             ODOMETRY_POSE
@@ -222,7 +222,7 @@ def test_dead_reckoning_sidestep_after_a_turn_and_reset() -> None:
 
 def test_dead_reckoning_output_is_a_copy() -> None:
     pipeline = PerceptionPipeline(PipelineConfig(), context(), outputs=[ODOMETRY_POSE])
-    pipeline.reset(Prior(pose=np.zeros(3)))
+    pipeline.reset(np.zeros(3), np.random.default_rng(0))
     first = pipeline.step(SensorFrame(time_s=0.1, odometry_delta=np.array([1.0, 0.0, 0.0])))
     first[ODOMETRY_POSE][:] = 99.0
     second = pipeline.step(SensorFrame(time_s=0.2, odometry_delta=np.array([1.0, 0.0, 0.0])))
@@ -244,7 +244,7 @@ def test_ekf_predict_covariance_of_a_straight_step_by_hand() -> None:
     d = 0.1
     s0 = START_STD**2
     pipeline = slam_pipeline()
-    pipeline.reset(Prior(pose=np.zeros(3)))
+    pipeline.reset(np.zeros(3), np.random.default_rng(0))
     frame = SensorFrame(
         time_s=0.1, odometry_delta=np.array([d, 0.0, 0.0]), emulated={POLE_SIGHTINGS: ()}
     )
@@ -274,7 +274,7 @@ def test_ekf_new_landmark_covariance_by_hand() -> None:
     syt = d * s0
     stt = s0 + HEADING_PER_SQRT_M**2 * d
     pipeline = slam_pipeline()
-    pipeline.reset(Prior(pose=np.zeros(3)))
+    pipeline.reset(np.zeros(3), np.random.default_rng(0))
     frame = SensorFrame(
         time_s=0.1,
         odometry_delta=np.array([d, 0.0, 0.0]),
@@ -294,7 +294,7 @@ def test_ekf_provider_matches_ekf_slam_driven_directly() -> None:
     rng = np.random.default_rng(4)
     prior = np.array([0.5, -0.3, 0.2])
     pipeline = slam_pipeline()
-    pipeline.reset(Prior(pose=prior))
+    pipeline.reset(prior, np.random.default_rng(0))
     reference = EkfSlam(PipelineConfig().slam, prior)
     for k in range(15):
         delta = np.array([0.02, 0.005, 0.03]) + rng.normal(0, 0.002, 3)
@@ -313,7 +313,7 @@ def test_ekf_provider_matches_ekf_slam_driven_directly() -> None:
 
 def test_ekf_provider_reset_starts_a_fresh_filter() -> None:
     pipeline = slam_pipeline()
-    pipeline.reset(Prior(pose=np.zeros(3)))
+    pipeline.reset(np.zeros(3), np.random.default_rng(0))
     first = pipeline.provider(SELF_POSE).slam
     pipeline.step(
         SensorFrame(
@@ -322,7 +322,7 @@ def test_ekf_provider_reset_starts_a_fresh_filter() -> None:
             emulated={POLE_SIGHTINGS: (sighting(3, 1.0, 0.0),)},
         )
     )
-    pipeline.reset(Prior(pose=np.array([1.0, 2.0, 0.5])))
+    pipeline.reset(np.array([1.0, 2.0, 0.5]), np.random.default_rng(0))
     assert pipeline.provider(SELF_POSE).slam is not first
     est = pipeline.provider(SELF_POSE).slam.estimate()
     np.testing.assert_allclose(est.pose, [1.0, 2.0, 0.5])
@@ -343,7 +343,7 @@ def test_pole_sighting_history_records_last_times_and_resets() -> None:
     )
     assert isinstance(pipeline.provider(POLE_LAST_SEEN), PoleSightingHistory)
     assert pipeline.frame_inputs == frozenset()
-    pipeline.reset(Prior(pose=np.zeros(3)))
+    pipeline.reset(np.zeros(3), np.random.default_rng(0))
     frames = [
         (0.1, (sighting(1, 2.0, 0.1), sighting(3, 3.0, -0.2))),
         (0.2, (sighting(3, 3.0, -0.2),)),
@@ -354,14 +354,14 @@ def test_pole_sighting_history_records_last_times_and_resets() -> None:
     for (time_s, seen), want in zip(frames, expected, strict=True):
         out = pipeline.step(SensorFrame(time_s=time_s, emulated={POLE_SIGHTINGS: seen}))
         assert dict(out[POLE_LAST_SEEN]) == want
-    pipeline.reset(Prior(pose=np.zeros(3)))
+    pipeline.reset(np.zeros(3), np.random.default_rng(0))
     out = pipeline.step(SensorFrame(time_s=0.1, emulated={POLE_SIGHTINGS: ()}))
     assert dict(out[POLE_LAST_SEEN]) == {}
 
 
 def test_pole_sighting_history_returns_snapshots() -> None:
     history = PoleSightingHistory()
-    history.reset(Prior(pose=np.zeros(3)))
+    history.reset(Prior(pose=np.zeros(3), rng=np.random.default_rng(0)))
     first = history.update({POLE_SIGHTINGS: (sighting(2, 1.0, 0.0),)}, 1.0)
     history.update({POLE_SIGHTINGS: (sighting(2, 1.0, 0.0),)}, 2.0)
     assert first == {2: 1.0}
@@ -392,9 +392,9 @@ def test_perception_output_key_error_names_what_is_computed() -> None:
 
 def test_prior_is_checked() -> None:
     with pytest.raises(ValueError, match=r"Prior\.pose"):
-        Prior(pose=np.array([0.0, np.nan, 0.0]))
+        Prior(pose=np.array([0.0, np.nan, 0.0]), rng=np.random.default_rng(0))
     with pytest.raises(ValueError, match=r"Prior\.pose"):
-        Prior(pose=np.zeros(2))
+        Prior(pose=np.zeros(2), rng=np.random.default_rng(0))
     with pytest.raises(TypeError, match="Generator"):
         Prior(pose=np.zeros(3), rng=np.random.RandomState(0))  # type: ignore[arg-type]
 

@@ -67,7 +67,12 @@ def test_models_are_frozen_and_keyword_only() -> None:
     with pytest.raises(TypeError):
         LaserModel(180, 180.0, 0.1, 10.0, 0.02, 0.0, 0.3)  # type: ignore[call-arg]
     with pytest.raises(TypeError):
-        SonarModel()  # type: ignore[call-arg]
+        SonarModel((25.0, 0.0, -25.0))  # type: ignore[call-arg]
+
+
+def test_defaults_are_seed_001_laser_and_nao_sonar() -> None:
+    assert LaserModel() == SEED_001_LASER
+    assert SonarModel() == NAO_SONAR
 
 
 @pytest.mark.parametrize(

@@ -287,8 +287,6 @@ def test_env_config_validates_when_built_directly() -> None:
         EnvConfig(task=TaskConfig(episode_s=0.15))
     with pytest.raises(ValueError, match="whole multiple"):
         EnvConfig(control_dt_s=0.1, physics_dt_s=0.03)
-    with pytest.raises(ValueError, match=r"needs sensors\.camera_mode='rendered'"):
-        EnvConfig(sensors=RigConfig(camera_mode="geometric"))
     with pytest.raises(ValueError, match="poles_enabled must be True"):
         EnvConfig(scene=SceneConfig(poles_enabled=False))
     with pytest.raises(ValueError, match="info_level"):
@@ -328,13 +326,16 @@ def test_front_and_back_end_are_selected_by_name() -> None:
 def test_default_perception_and_cnn_settings_by_path() -> None:
     default = ActiveVisionConfig().perception
     assert (default.pole_sightings, default.self_pose) == ("cnn", "ekf_slam")
-    assert (default.slam.backend, default.cnn.score_threshold) == ("gated", 0.6)
-    assert default.cnn.require_both_colours
+    assert (default.slam.backend, default.cnn.score_threshold) == ("gated", 0.4)
+    assert default.cnn_pole_score_threshold == 0.6 and default.cnn.require_both_colours
     cnn = av(
         score_threshold=0.5,
         **{"perception.cnn.edges": None, "perception.cnn.check_colours": False},
     )
-    assert cnn.perception.cnn.score_threshold == 0.5
+    assert cnn.perception.cnn_pole_score_threshold == 0.5
+    assert cnn.perception.cnn.score_threshold == 0.4  # the image detections keep theirs
+    with pytest.raises(ValueError, match="cnn_pole_score_threshold"):
+        av(score_threshold=0.3)  # below the detections' own threshold: it could not act
     assert cnn.perception.cnn.edges is None and cnn.perception.cnn.check_colours is False
     near = av(**{"perception.cnn.edges.width_min_px": 20}).perception.cnn.edges
     assert near is not None and near.width_min_px == 20.0
@@ -347,13 +348,26 @@ def test_default_perception_and_cnn_settings_by_path() -> None:
         ({"self_pose": "gps"}, "self_pose must be one of"),
         ({"backend": "ukf"}, "backend must be one of"),
         ({"min_views": 0}, r"min_views must be .*>= 1"),
-        ({"frontend": "cnn", "camera_mode": "geometric"}, r"needs sensors\.camera_mode='rendered'"),
-        ({"camera_mode": "geometric"}, "frontend='colour'"),  # the default front end is the CNN
     ],
 )
 def test_bad_front_or_back_end_is_refused(overrides: dict[str, Any], message: str) -> None:
     with pytest.raises(ValueError, match=message):
         av(**overrides)
+
+
+@pytest.mark.parametrize(
+    "overrides",
+    [{"frontend": "cnn", "camera_mode": "geometric"}, {"camera_mode": "geometric"}],
+)
+def test_the_geometric_mode_refuses_an_image_reader_without_emulator(
+    overrides: dict[str, Any],
+) -> None:
+    # the default front end is the CNN, which reads images and has no emulator
+    with pytest.raises(
+        ValueError,
+        match=r"renders no image.*'image_detections', 'pole_sightings'.*frontend='colour'",
+    ):
+        gym.make("SPL/ActiveVision-v0", **overrides)
 
 
 # --- the envs' keyword arguments ---------------------------------------------------------------

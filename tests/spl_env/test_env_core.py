@@ -337,7 +337,7 @@ def test_another_robot_rig_senses_its_own_head_and_surroundings() -> None:
     assert frame.time_s == 1.5
     assert frame.image is None and frame.emulated == {} and frame.truth is None
     np.testing.assert_array_equal(frame.odometry_delta, np.zeros(3))  # standing: no error
-    assert times.render >= 0 and times.sensors >= 0
+    assert times["render"] >= 0 and times["sensors"] >= 0
     # camera pose from the joint angles by hand: neck 0.44 m, pitch joint 0.017 m above it,
     # the camera (0.0587, 0, 0.0636) in the head frame, pitched by `pitch` then yawed by `yaw`
     ox, oz = NAO.camera_offset_m[0], NAO.camera_offset_m[2]

@@ -18,6 +18,7 @@ from spl_env.observations.body import EpisodeClockEncoder, HeadEncoder, SonarEnc
 from spl_env.observations.poles import PoleMapEncoder
 from spl_env.observations.self_pose import SelfPoseEncoder
 from spl_env.robots.nao import RobotConfig, head_action, head_target
+from spl_env.sim.placement import Placement
 from spl_env.tasks.base import TaskContext
 from spl_env.tasks.head_control import HeadControlTaskConfig
 from spl_env.tasks.look_around import LookAroundTask
@@ -208,7 +209,11 @@ def test_compose_space_refuses_a_key_from_two_encoders() -> None:
 
 def test_head_control_tasks_compose_the_documented_observation() -> None:
     context = TaskContext(
-        dimensions=FieldDimensions(), robot=ROBOT, control_dt_s=0.1, n_landmarks=6
+        dimensions=FieldDimensions(),
+        robot=ROBOT,
+        control_dt_s=0.1,
+        n_landmarks=6,
+        placement=Placement(FieldDimensions(), np.zeros((0, 3)), ROBOT.body_radius_m),
     )
     space = compose_space(LookAroundTask(HeadControlTaskConfig(), context).encoders())
     shapes = {key: box.shape for key, box in space.spaces.items()}

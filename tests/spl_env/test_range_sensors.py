@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import fields, replace
 
 import numpy as np
 import pytest
 from scipy.stats import binom, chi2
 
+from perception.sensor_models import LaserModel, SonarModel
 from spl_env.sensors.laser import Laser, LaserConfig
 from spl_env.sensors.sonar import Sonar, SonarConfig, merge_echoes, surface_echoes
 
@@ -145,6 +146,26 @@ def test_laser_is_deterministic_per_seed() -> None:
 def test_bad_laser_config_raises_naming_the_field(field: str, value: object) -> None:
     with pytest.raises(ValueError, match=f"laser.{field}"):
         LaserConfig(**{field: value})  # type: ignore[arg-type]
+
+
+def test_configs_are_the_perception_models() -> None:
+    # The configs are the models perception interprets the readings with; the sonar adds only
+    # the simulation's rays per sector and dropout. A plain LaserModel configures a Laser too.
+    laser_config, sonar_config = LaserConfig(n_beams=90), SonarConfig(max_echoes=4)
+    assert isinstance(laser_config, LaserModel) and isinstance(sonar_config, SonarModel)
+    assert Laser(laser_config).model is laser_config
+    assert Sonar(sonar_config).model is sonar_config
+    shared = {f.name for f in fields(SonarModel)}
+    assert {f.name for f in fields(SonarConfig)} - shared == {
+        "rays_per_sector",
+        "dropout_probability",
+    }
+    assert all(getattr(SonarConfig(), name) == getattr(SonarModel(), name) for name in shared)
+    scene = Scene((1, wall((1.0, 0.0), 3.0)))
+    np.testing.assert_array_equal(
+        Laser(LaserModel(n_beams=90)).measure(scene, (0.0, 0.0, 0.0), RNG(5)),
+        Laser(laser_config).measure(scene, (0.0, 0.0, 0.0), RNG(5)),
+    )
 
 
 def test_laser_rejects_bad_pose_and_bad_caster_output() -> None:

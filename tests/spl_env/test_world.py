@@ -10,7 +10,13 @@ import pytest
 
 from perception.geometry import project_points
 from spl_env.robots.nao import NaoRobot, RobotConfig
-from spl_env.scenes.spl_field import SceneBodies, SceneConfig, SplFieldScene, build_scene
+from spl_env.scenes.spl_field import (
+    POSTER_FILES,
+    SceneBodies,
+    SceneConfig,
+    SplFieldScene,
+    build_scene,
+)
 from spl_env.sensors.camera import Camera, CameraConfig, EpisodeLighting
 from spl_env.sim.world import MAX_PARTS_PER_BODY, BulletWorld, VisualPart
 
@@ -183,3 +189,34 @@ def test_field_scene_answers_what_is_where() -> None:
     np.testing.assert_allclose(ball, [-2.0, 1.0], atol=1e-9)
     np.testing.assert_allclose(velocity, [0.0, 0.0], atol=1e-12)
     world.close()
+
+
+def test_field_scene_draws_posters_from_the_scene_seed_or_a_given_generator(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    def posters(config: SceneConfig, poster_rng: np.random.Generator | None = None) -> list[str]:
+        """The poster files the scene paints on its boards, in order."""
+        world = BulletWorld(time_step_s=0.01)
+        painted: list[str] = []
+        paint = world.set_texture
+
+        def record(name: str, path: str) -> None:
+            painted.append(path.rsplit("/", 1)[-1])
+            paint(name, path)
+
+        monkeypatch.setattr(world, "set_texture", record)
+        SplFieldScene(world, config, poster_rng=poster_rng)
+        world.close()
+        return painted
+
+    seeded = posters(SceneConfig(scene_seed=7))
+    assert len(seeded) > 10 and len(set(seeded)) > 1
+    assert posters(SceneConfig(scene_seed=7)) == seeded
+    assert posters(SceneConfig(scene_seed=8)) != seeded
+    # a generator passed in draws the posters instead of scene_seed, and is advanced by them
+    rng = np.random.default_rng(7)
+    assert posters(SceneConfig(scene_seed=3), poster_rng=rng) == seeded
+    reference = np.random.default_rng(7)
+    for _ in seeded:  # one draw per panel
+        reference.integers(len(POSTER_FILES))
+    assert rng.integers(1 << 30) == reference.integers(1 << 30)

@@ -22,10 +22,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from perception.geometry import FloatArray, project_points
-from perception.representations import POLE_SIGHTINGS
 from perception.types import CameraModel, CameraState, LandmarkObservation, PoleGeometry
+from perception.validation import check_in_interval, check_positive
 from perception.vision.colour_filter import ColourPoleDetector
 from spl_env.robots.nao import NaoRobot
+from spl_env.scenes.spl_field import SplFieldScene
 from spl_env.sim.world import BulletWorld
 
 # The band centroid of a lit cylinder sits pi/4 radius in front of its axis, as the detector
@@ -74,31 +75,26 @@ class GeometricCameraConfig:
     border_margin_px: float = 1.0  # the outline must stay this far inside the image
 
     def __post_init__(self) -> None:
-        bounds = [b for b, _ in self.recall_by_smear]
-        if (
-            not bounds
-            or not all(math.isfinite(b) for b in bounds)
-            or any(b <= a for a, b in zip([0.0, *bounds], bounds, strict=False))
-        ):
-            raise ValueError(
-                "GeometricCameraConfig.recall_by_smear needs finite increasing positive bounds, "
-                f"got {self.recall_by_smear}"
+        owner = "GeometricCameraConfig"
+        if not self.recall_by_smear:
+            raise ValueError(f"{owner}.recall_by_smear needs at least one (bound, recall) pair")
+        previous = 0.0
+        for k, (bound, recall) in enumerate(self.recall_by_smear):
+            # bounds finite, positive and increasing: each in (the previous bound, inf)
+            check_in_interval(owner, f"recall_by_smear[{k}] bound", bound, previous, math.inf)
+            check_in_interval(
+                owner,
+                f"recall_by_smear[{k}] recall",
+                recall,
+                0.0,
+                1.0,
+                low_inclusive=True,
+                high_inclusive=True,
             )
-        if not all(0.0 <= r <= 1.0 for _, r in self.recall_by_smear):
-            raise ValueError(
-                "GeometricCameraConfig.recall_by_smear recalls must be in [0, 1], "
-                f"got {self.recall_by_smear}"
-            )
+            previous = bound
         for name in ("pixel_std_u_px", "pixel_std_v_px", "border_margin_px"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0):
-                raise ValueError(
-                    f"GeometricCameraConfig.{name} must be finite and >= 0, got {value}"
-                )
-        if not (math.isfinite(self.max_range_m) and self.max_range_m > 0):
-            raise ValueError(
-                f"GeometricCameraConfig.max_range_m must be finite and > 0, got {self.max_range_m}"
-            )
+            check_positive(owner, name, getattr(self, name), allow_zero=True)
+        check_positive(owner, "max_range_m", self.max_range_m)
 
     def recall(self, smear: FloatArray) -> FloatArray:
         """Detection chance (N,) of fully visible poles with ``smear`` (N,) blur / width."""
@@ -135,6 +131,20 @@ class GeometricPoleCamera:
         self.positions = np.asarray(positions, dtype=np.float64).reshape(-1, 2)
         self.ids = ids
         self.body_ids = np.asarray(body_ids, dtype=np.int64)
+
+    @classmethod
+    def for_scene(
+        cls, scene: SplFieldScene, config: GeometricCameraConfig, model: CameraModel
+    ) -> GeometricPoleCamera:
+        """The pole camera of ``scene``'s poles for a camera with intrinsics ``model``."""
+        return cls(
+            config,
+            model,
+            scene.config.poles.geometry,
+            scene.landmarks,
+            tuple(int(i) for i in scene.landmark_ids),
+            scene.pole_body_ids(),
+        )
 
     def visible(
         self, world: BulletWorld, position: FloatArray, rotation: FloatArray
@@ -213,8 +223,6 @@ class GeometricPoleSightings:
     """Emulates the colour front end's ``pole_sightings``: the band centres of
     :class:`GeometricPoleCamera` measured with ``detector``'s model (range from the two band
     elevations, bearing from the column and the head angles)."""
-
-    provides = POLE_SIGHTINGS
 
     def __init__(self, camera: GeometricPoleCamera, detector: ColourPoleDetector) -> None:
         self.camera = camera

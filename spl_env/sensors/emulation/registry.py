@@ -1,0 +1,48 @@
+"""Which provider each emulator stands in for, and the emulators of an env's configuration.
+
+In the geometric camera mode nothing is rendered; a representation whose configured provider
+has an emulator here is delivered by that emulator instead (truth plus noise fitted to the
+rendered pipeline). A provider that reads images and has no emulator cannot run in that mode.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+
+from perception.pipeline import PipelineConfig
+from perception.representations import POLE_SIGHTINGS
+from perception.vision.colour_filter import ColourPoleDetector
+from spl_env.scenes.spl_field import SplFieldScene
+from spl_env.sensors.emulation.poles import GeometricPoleCamera, GeometricPoleSightings
+from spl_env.sensors.rig import Emulator, RigConfig
+
+EmulatorFactory = Callable[[SplFieldScene, RigConfig, PipelineConfig], Emulator]
+
+
+def _colour_pole_sightings(
+    scene: SplFieldScene, sensors: RigConfig, perception: PipelineConfig
+) -> GeometricPoleSightings:
+    model, geometry = sensors.camera.model, scene.config.poles.geometry
+    camera = GeometricPoleCamera.for_scene(scene, sensors.geometric_camera, model)
+    detector = ColourPoleDetector(perception.colour_filter, model, scene.codes, geometry)
+    return GeometricPoleSightings(camera, detector)
+
+
+# (representation, the provider it emulates) -> how to build the emulator
+EMULATORS: Mapping[tuple[str, str], EmulatorFactory] = {
+    (POLE_SIGHTINGS, "colour"): _colour_pole_sightings,
+}
+
+
+def emulators_for(
+    scene: SplFieldScene, sensors: RigConfig, perception: PipelineConfig
+) -> dict[str, Emulator]:
+    """Representation -> emulator for every configured provider that has one, in the geometric
+    camera mode (none in the rendered mode)."""
+    if sensors.camera_mode != "geometric":
+        return {}
+    return {
+        representation: factory(scene, sensors, perception)
+        for (representation, provider), factory in EMULATORS.items()
+        if perception.provider_name(representation) == provider
+    }
