@@ -65,20 +65,6 @@ def _by_name(schema: Mapping[str, Any]) -> dict[str, list[str]]:
     return paths
 
 
-def config_paths(cls: type) -> dict[str, list[str]]:
-    """Map each field name of the config class ``cls`` to the dotted paths where it occurs.
-
-    Covers every field that can be overridden, nested ones included (also inside optional
-    configs that are None by default), in tree order; for docs and error hints.
-    """
-    return _by_name(_schema(cls))
-
-
-def describe_aliases(aliases: Mapping[str, str]) -> str:
-    """The alias table for docs, one ``alias -> dotted.path`` line per alias, in table order."""
-    return "\n".join(f"{alias} -> {path}" for alias, path in aliases.items())
-
-
 def _type_name(tp: Any) -> str:
     """The annotation ``tp`` as written in code, without module prefixes."""
     if tp is type(None):

@@ -49,3 +49,16 @@ def test_recording_needs_an_spl_env() -> None:
     env = gym.make("CartPole-v1")
     with pytest.raises(TypeError, match="SplEnv"):
         frontends_for(env, ("colour",))
+
+
+@pytest.mark.parametrize(("frontend", "missing"), [("cnn", "image"), ("oracle", "truth")])
+def test_a_front_end_reading_what_the_frames_lack_is_refused(frontend: str, missing: str) -> None:
+    # the geometric camera renders no image, and the colour front end asks for no truth
+    env = gym.make("SPL/ActiveVision-v0", camera_mode="geometric", frontend="colour", episode_s=1.0)
+    with pytest.raises(ValueError, match=rf"front end '{frontend}' reads frame\.\['{missing}'\]"):
+        frontends_for(env, (frontend,))
+    with pytest.raises(ValueError, match=f"'{frontend}'"):  # also among front ends it can record
+        frontends_for(env, ("colour", frontend))
+    # the env's own front end records its own sightings: no pipeline of its own
+    assert frontends_for(env, ("colour",)) == {"colour": None}
+    env.close()

@@ -8,6 +8,7 @@ the envs' keyword arguments reach.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import re
 from typing import Any
 
@@ -20,7 +21,7 @@ from perception.pipeline import PipelineConfig
 from spl_env.config import SPL_ALIASES, EnvConfig
 from spl_env.envs.active_vision import ACTIVE_VISION_ALIASES, ActiveVisionConfig
 from spl_env.envs.look_around import LookAroundConfig
-from spl_env.overrides import apply_overrides, config_paths
+from spl_env.overrides import apply_overrides
 from spl_env.scenes.spl_field import SceneConfig
 from spl_env.sensors.laser import LaserConfig
 from spl_env.sensors.rig import RigConfig
@@ -28,11 +29,34 @@ from spl_env.tasks.active_vision import ActiveVisionTaskConfig
 from spl_env.tasks.base import TaskConfig
 from spl_env.tasks.head_control import HeadControlTaskConfig
 
-# every env config class with the alias table its env uses
-ENV_CONFIGS: list[tuple[type[EnvConfig], dict[str, str]]] = [
-    (EnvConfig, SPL_ALIASES),
-    (ActiveVisionConfig, ACTIVE_VISION_ALIASES),
-    (LookAroundConfig, SPL_ALIASES),
+# Every alias, by hand: the dotted path it must reach and a valid value that is not the default
+# of that field (so that setting it shows).
+SPL_ALIAS_CASES: dict[str, tuple[str, Any]] = {
+    "episode_s": ("task.episode_s", 30.0),
+    "n_other_robots": ("task.n_other_robots", 2),
+    "camera_mode": ("sensors.camera_mode", "geometric"),
+    "randomise_lighting": ("sensors.camera.randomise_lighting", True),
+    "sonar": ("sensors.sonar", None),
+    "laser": ("sensors.laser", LaserConfig(n_beams=90)),
+    "frontend": ("perception.pole_sightings", "colour"),
+    "self_pose": ("perception.self_pose", "oracle"),
+    "backend": ("perception.slam.backend", "fej"),
+    "min_views": ("perception.slam.min_views", 3),
+    "gate": ("perception.slam.gate", "mahalanobis"),
+    # at least perception.cnn.score_threshold (0.4), which the detections keep
+    "score_threshold": ("perception.cnn_pole_score_threshold", 0.5),
+}
+ACTIVE_VISION_ALIAS_CASES: dict[str, tuple[str, Any]] = {
+    **SPL_ALIAS_CASES,
+    "body_behaviour": ("task.body_behaviour", "square"),
+    "square_side_m": ("task.square_side_m", 2.5),
+}
+
+# every env config class with the alias table its env uses, and that table's cases by hand
+ENV_CONFIGS: list[tuple[type[EnvConfig], dict[str, str], dict[str, tuple[str, Any]]]] = [
+    (EnvConfig, SPL_ALIASES, SPL_ALIAS_CASES),
+    (ActiveVisionConfig, ACTIVE_VISION_ALIASES, ACTIVE_VISION_ALIAS_CASES),
+    (LookAroundConfig, SPL_ALIASES, SPL_ALIAS_CASES),
 ]
 
 
@@ -41,31 +65,37 @@ def av(**overrides: Any) -> ActiveVisionConfig:
     return apply_overrides(ActiveVisionConfig(), overrides, ACTIVE_VISION_ALIASES)
 
 
+def get(config: Any, path: str) -> Any:
+    """The value at the dotted ``path`` of ``config``."""
+    return functools.reduce(getattr, path.split("."), config)
+
+
 # --- the alias tables --------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize(("config_class", "aliases"), ENV_CONFIGS)
-def test_every_alias_names_an_existing_path_and_shadows_no_top_level_field(
-    config_class: type[EnvConfig], aliases: dict[str, str]
+@pytest.mark.parametrize(("config_class", "aliases", "cases"), ENV_CONFIGS)
+def test_every_alias_names_its_path_and_shadows_no_top_level_field(
+    config_class: type[EnvConfig], aliases: dict[str, str], cases: dict[str, tuple[str, Any]]
 ) -> None:
-    paths = {path for found in config_paths(config_class).values() for path in found}
+    assert aliases == {alias: path for alias, (path, _) in cases.items()}
     top_level = {f.name for f in dataclasses.fields(config_class)}
-    for alias, path in aliases.items():
-        assert path in paths, f"alias {alias!r} -> {path!r} is no field of {config_class}"
-        assert "." not in alias and alias not in top_level
+    for alias in aliases:
+        assert "." not in alias and alias not in top_level, alias
     apply_overrides(config_class(), {}, aliases)  # the table itself is accepted
 
 
-@pytest.mark.parametrize(("config_class", "aliases"), ENV_CONFIGS)
+@pytest.mark.parametrize(("config_class", "aliases", "cases"), ENV_CONFIGS)
 def test_each_alias_sets_the_field_of_its_path(
-    config_class: type[EnvConfig], aliases: dict[str, str]
+    config_class: type[EnvConfig], aliases: dict[str, str], cases: dict[str, tuple[str, Any]]
 ) -> None:
     default = config_class()
-    for alias, path in aliases.items():
-        value: Any = default
-        for name in path.split("."):
-            value = getattr(value, name)
-        assert apply_overrides(default, {alias: value}, aliases) == default
+    assert set(cases) == set(aliases)  # a case by hand for every alias
+    for alias, (path, value) in cases.items():
+        assert get(default, path) != value, f"pick a value for {alias!r} that is no default"
+        config = apply_overrides(default, {alias: value}, aliases)
+        assert get(config, path) == value, alias
+        # it sets that field and nothing else: the same config as its dotted path
+        assert config == apply_overrides(default, {path: value}), alias
         # the alias and its path are one field: setting both is setting it twice
         with pytest.raises(TypeError, match=f"'{re.escape(path)}' is set twice"):
             apply_overrides(default, {alias: value, path: value}, aliases)

@@ -8,14 +8,14 @@ commands), so that each check knows the commanded motion exactly.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import numpy as np
 import pytest
 
 from perception.geometry import wrap_angle
-from perception.representations import SELF_POSE
+from perception.representations import POLE_SIGHTINGS, SELF_POSE
 from spl_env.envs.look_around import LookAroundEnv
 from spl_env.robots.nao import NaoCommand
 
@@ -253,15 +253,36 @@ def test_world_state_names_every_robot_and_ours_first() -> None:
     env.close()
 
 
-def test_perception_runs_on_the_core_pipeline_once_per_step() -> None:
+def test_perception_runs_on_the_core_pipeline_once_per_step(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     env = LookAroundEnv(n_other_robots=0, **FAST)
+    pipeline = env.pipeline
+    assert set(pipeline.representations) >= {POLE_SIGHTINGS, SELF_POSE}
+    calls: dict[str, list[float]] = {name: [] for name in pipeline.representations}
+
+    def counting(name: str, update: Callable[..., Any]) -> Callable[..., Any]:
+        def spy(inputs: Any, time_s: float) -> Any:
+            calls[name].append(time_s)
+            return update(inputs, time_s)
+
+        return spy
+
+    for name in pipeline.representations:
+        provider = pipeline.provider(name)
+        monkeypatch.setattr(provider, "update", counting(name, provider.update))
     _, info = env.reset(seed=0)
-    slam = env.pipeline.provider(SELF_POSE).slam
-    for _ in range(3):
+    assert calls == {name: [0.0] for name in calls}  # once each at reset
+    slam = pipeline.provider(SELF_POSE).slam
+    for k in range(1, 4):
         *_, info = env.step(LEVEL)
-        assert env.pipeline.provider(SELF_POSE).slam is slam  # one filter per episode
+        assert env.pipeline is pipeline and pipeline.provider(SELF_POSE).slam is slam
+        for name, times in calls.items():  # once each per step, at the step's time
+            assert times == pytest.approx([0.1 * j for j in range(k + 1)]), name
         np.testing.assert_array_equal(info["perception"]["pose"], slam.estimate().pose)
         np.testing.assert_array_equal(env.perception_output[SELF_POSE].pose, slam.estimate().pose)
+    env.reset(seed=1)
+    assert all(len(times) == 5 and times[-1] == 0.0 for times in calls.values())
     env.close()
 
 

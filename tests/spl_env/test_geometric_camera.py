@@ -27,46 +27,46 @@ GEOMETRIC = {"camera_mode": "geometric", "frontend": "colour", "episode_s": 3.0}
 
 
 @pytest.fixture(scope="module")
-def sim() -> Iterator[ActiveVisionEnv]:
+def env() -> Iterator[ActiveVisionEnv]:
     env = ActiveVisionEnv(n_other_robots=1, **GEOMETRIC)
     env.reset(seed=0)
     yield env
     env.close()
 
 
-def _emulator(sim: ActiveVisionEnv) -> GeometricPoleSightings:
-    emulator = sim.rig.emulators[POLE_SIGHTINGS]
+def _emulator(env: ActiveVisionEnv) -> GeometricPoleSightings:
+    emulator = env.rig.emulators[POLE_SIGHTINGS]
     assert isinstance(emulator, GeometricPoleSightings)
     return emulator
 
 
-def _camera(sim: ActiveVisionEnv) -> GeometricPoleCamera:
-    return _emulator(sim).camera
+def _camera(env: ActiveVisionEnv) -> GeometricPoleCamera:
+    return _emulator(env).camera
 
 
-def _look(sim: ActiveVisionEnv, pose: tuple[float, float, float], head_yaw: float = 0.0) -> None:
-    sim.robots[0].place(np.array(pose), head=np.array([head_yaw, 0.0]))
+def _look(env: ActiveVisionEnv, pose: tuple[float, float, float], head_yaw: float = 0.0) -> None:
+    env.robots[0].place(np.array(pose), head=np.array([head_yaw, 0.0]))
 
 
-def _detector(sim: ActiveVisionEnv) -> ColourPoleDetector:
-    scene = sim.config.scene
+def _detector(env: ActiveVisionEnv) -> ColourPoleDetector:
+    scene = env.config.scene
     return ColourPoleDetector(
-        ColourFilterConfig(), sim.config.sensors.camera.model, sim.scene.codes, scene.poles.geometry
+        ColourFilterConfig(), env.config.sensors.camera.model, env.scene.codes, scene.poles.geometry
     )
 
 
-def test_band_centres_agree_with_rendered_detection(sim: ActiveVisionEnv) -> None:
-    sim.robots[1].place(np.array([4.0, -2.5, 0.0]))  # out of the way
-    robot, camera = sim.robots[0], _camera(sim)
-    detector = _detector(sim)
-    pole = sim.scene.landmarks[1]  # id 1 at (0, 3.35)
-    assert sim.scene.landmark_ids[1] == 1
+def test_band_centres_agree_with_rendered_detection(env: ActiveVisionEnv) -> None:
+    env.robots[1].place(np.array([4.0, -2.5, 0.0]))  # out of the way
+    robot, camera = env.robots[0], _camera(env)
+    detector = _detector(env)
+    pole = env.scene.landmarks[1]  # id 1 at (0, 3.35)
+    assert env.scene.landmark_ids[1] == 1
     for distance in (1.5, 2.5, 3.5):
-        _look(sim, (pole[0], pole[1] - distance, math.pi / 2))
+        _look(env, (pole[0], pole[1] - distance, math.pi / 2))
         position, rotation = robot.camera_pose_world()
-        seen = {b.landmark_id: b for b in camera.visible(sim.world, position, rotation)}
-        image, _ = sim.rig.camera.render(
-            sim.world, position, rotation, EpisodeLighting.default(), np.random.default_rng(0)
+        seen = {b.landmark_id: b for b in camera.visible(env.world, position, rotation)}
+        image, _ = env.rig.camera.render(
+            env.world, position, rotation, EpisodeLighting.default(), np.random.default_rng(0)
         )
         found = {o.landmark_id: o for o in detector.detect(image, robot.camera_state())}
         assert 1 in seen and 1 in found
@@ -82,44 +82,44 @@ def test_band_centres_agree_with_rendered_detection(sim: ActiveVisionEnv) -> Non
         assert obs.range_m == pytest.approx(true_range, rel=0.01)
 
 
-def test_occluded_and_out_of_view_poles_are_not_seen(sim: ActiveVisionEnv) -> None:
-    camera, robot, other = _camera(sim), sim.robots[0], sim.robots[1]
-    pole = sim.scene.landmarks[1]
-    _look(sim, (pole[0], pole[1] - 3.0, math.pi / 2))
+def test_occluded_and_out_of_view_poles_are_not_seen(env: ActiveVisionEnv) -> None:
+    camera, robot, other = _camera(env), env.robots[0], env.robots[1]
+    pole = env.scene.landmarks[1]
+    _look(env, (pole[0], pole[1] - 3.0, math.pi / 2))
     other.place(np.array([4.0, -2.5, 0.0]))
     position, rotation = robot.camera_pose_world()
-    assert 1 in [b.landmark_id for b in camera.visible(sim.world, position, rotation)]
+    assert 1 in [b.landmark_id for b in camera.visible(env.world, position, rotation)]
     other.place(np.array([pole[0], pole[1] - 2.4, 0.0]))  # its head blocks the view
     position, rotation = robot.camera_pose_world()
-    assert 1 not in [b.landmark_id for b in camera.visible(sim.world, position, rotation)]
+    assert 1 not in [b.landmark_id for b in camera.visible(env.world, position, rotation)]
     other.place(np.array([4.0, -2.5, 0.0]))
-    _look(sim, (0.0, 0.0, 0.0))  # facing the goal: the nearest poles are 48° off the axis
+    _look(env, (0.0, 0.0, 0.0))  # facing the goal: the nearest poles are 48° off the axis
     position, rotation = robot.camera_pose_world()
-    assert camera.visible(sim.world, position, rotation) == []
+    assert camera.visible(env.world, position, rotation) == []
 
 
 def test_emulated_sightings_are_the_colour_filter_model_of_the_band_centres(
-    sim: ActiveVisionEnv,
+    env: ActiveVisionEnv,
 ) -> None:
-    sim.robots[1].place(np.array([4.0, -2.5, 0.0]))
-    robot, emulator = sim.robots[0], _emulator(sim)
-    pole = sim.scene.landmarks[1]
-    _look(sim, (pole[0] + 0.3, pole[1] - 2.0, math.pi / 2))
+    env.robots[1].place(np.array([4.0, -2.5, 0.0]))
+    robot, emulator = env.robots[0], _emulator(env)
+    pole = env.scene.landmarks[1]
+    _look(env, (pole[0] + 0.3, pole[1] - 2.0, math.pi / 2))
     state = robot.camera_state()
-    sightings = emulator.observe(sim.world, robot, state, np.random.default_rng(1), 0.0)
+    sightings = emulator.observe(env.world, robot, state, np.random.default_rng(1), 0.0)
     [one] = [s for s in sightings if s.landmark_id == 1]
     # the same draws through the camera, measured by the detector's model
     position, rotation = robot.camera_pose_world()
     [bands] = [
         b
-        for b in emulator.camera.observe(sim.world, position, rotation, np.random.default_rng(1))
+        for b in emulator.camera.observe(env.world, position, rotation, np.random.default_rng(1))
         if b.landmark_id == 1
     ]
     expected = emulator.detector.observe_band_centres(1, bands.upper, bands.lower, bands.box, state)
     assert expected is not None
     assert (one.range_m, one.bearing_rad) == (expected.range_m, expected.bearing_rad)
     true_range, true_bearing = landmark_range_bearing(
-        robot.pose, sim.scene.landmark_ids, sim.scene.landmarks
+        robot.pose, env.scene.landmark_ids, env.scene.landmarks
     )[1]
     assert one.range_m == pytest.approx(true_range, rel=0.05)
     assert one.bearing_rad == pytest.approx(true_bearing, abs=0.02)
@@ -140,15 +140,15 @@ def test_recall_is_piecewise_by_smear() -> None:
         GeometricCameraConfig(pixel_std_u_px=-1.0)
 
 
-def test_observe_thins_and_disturbs_with_the_configured_statistics(sim: ActiveVisionEnv) -> None:
+def test_observe_thins_and_disturbs_with_the_configured_statistics(env: ActiveVisionEnv) -> None:
     from scipy import stats
 
-    sim.robots[1].place(np.array([4.0, -2.5, 0.0]))
-    pole = sim.scene.landmarks[1]
-    _look(sim, (pole[0], pole[1] - 2.0, math.pi / 2))
-    position, rotation = sim.robots[0].camera_pose_world()
-    camera = _camera(sim)
-    [truth] = [b for b in camera.visible(sim.world, position, rotation) if b.landmark_id == 1]
+    env.robots[1].place(np.array([4.0, -2.5, 0.0]))
+    pole = env.scene.landmarks[1]
+    _look(env, (pole[0], pole[1] - 2.0, math.pi / 2))
+    position, rotation = env.robots[0].camera_pose_world()
+    camera = _camera(env)
+    [truth] = [b for b in camera.visible(env.world, position, rotation) if b.landmark_id == 1]
     config = GeometricCameraConfig(
         recall_by_smear=((1.0, 0.5),), pixel_std_u_px=0.8, pixel_std_v_px=0.3
     )
@@ -165,7 +165,7 @@ def test_observe_thins_and_disturbs_with_the_configured_statistics(sim: ActiveVi
     kept = [
         b
         for _ in range(n)
-        for b in noisy.observe(sim.world, position, rotation, rng)
+        for b in noisy.observe(env.world, position, rotation, rng)
         if b.landmark_id == 1
     ]
     assert stats.binomtest(len(kept), n, 0.5).pvalue > 0.001
@@ -178,7 +178,7 @@ def test_observe_thins_and_disturbs_with_the_configured_statistics(sim: ActiveVi
         assert low < np.mean(offsets[:, column] ** 2) / std**2 < high
     # blur of twice the pole's width: nothing is kept
     wide = 2.0 * (truth.box[2] - truth.box[0])
-    assert noisy.observe(sim.world, position, rotation, rng, blur_px=wide) == ()
+    assert noisy.observe(env.world, position, rotation, rng, blur_px=wide) == ()
 
 
 def test_geometric_env_passes_checker_and_is_deterministic() -> None:

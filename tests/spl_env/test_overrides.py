@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from spl_env.overrides import apply_overrides, config_paths, describe_aliases
+from spl_env.overrides import apply_overrides
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -211,25 +211,7 @@ def test_adding_a_nested_field_does_not_change_what_keys_mean() -> None:
         assert get(new, path) == get(old, path)
     assert (new.perception.frontend, new.episode_s) == ("colour", 30.0)
     assert (new.sim.frontend, new.sim.episode_s) == ("pixels", 1.0)  # the new fields untouched
-    assert config_paths(GrownRoot)["frontend"] == ["sim.frontend", "perception.frontend"]
     assert apply_overrides(GrownRoot(), {"sim.frontend": "rays"}).sim.frontend == "rays"
-
-
-def test_config_paths_maps_names_to_paths_in_tree_order() -> None:
-    paths = config_paths(Root)
-    assert list(paths)[:4] == ["sim", "timing", "physics_dt_s", "control_dt_s"]
-    assert paths["mount_height_m"] == ["sim.sonar.mount_height_m", "sim.laser.mount_height_m"]
-    assert paths["n_beams"] == ["sim.laser.n_beams"]  # inside an optional config that is None
-    assert paths["episode_s"] == ["episode_s"]
-    assert "steps" not in paths  # init=False
-    assert sum(len(p) for p in paths.values()) == 23
-
-
-def test_describe_aliases_renders_one_line_per_alias_in_table_order() -> None:
-    assert describe_aliases(ALIASES) == (
-        "frontend -> perception.frontend\nn_robots -> sim.n_robots\nlaser -> sim.laser"
-    )
-    assert describe_aliases({}) == ""
 
 
 @pytest.mark.parametrize(
@@ -460,10 +442,38 @@ def spelt_overrides(draw: st.DrawFn) -> tuple[list[str], list[tuple[str, Any]]]:
     return paths, draw(st.permutations(list(merged.items())))
 
 
+# every field of Root that can be set, by hand, in tree order (Root.steps has init=False)
+ROOT_PATHS = (
+    "sim",
+    "sim.timing",
+    "sim.timing.physics_dt_s",
+    "sim.timing.control_dt_s",
+    "sim.camera",
+    "sim.camera.noise_std",
+    "sim.camera.gain",
+    "sim.camera.lighting",
+    "sim.camera.mode",
+    "sim.sonar",
+    "sim.sonar.range_noise_std_m",
+    "sim.sonar.mount_height_m",
+    "sim.laser",
+    "sim.laser.n_beams",
+    "sim.laser.mount_height_m",
+    "sim.n_robots",
+    "sim.seed",
+    "sim.speed",
+    "sim.recall",
+    "perception",
+    "perception.frontend",
+    "perception.threshold",
+    "episode_s",
+)
+
+
 def leaves(config: Any) -> dict[str, Any]:
     """The value at every path of ``Root`` that holds no config (None below a None config)."""
     found = {}
-    for path in (path for paths in config_paths(Root).values() for path in paths):
+    for path in ROOT_PATHS:
         value = functools.reduce(
             lambda obj, name: getattr(obj, name, None), path.split("."), config
         )
