@@ -163,6 +163,43 @@ class LandmarkObservation:
 
 
 @dataclass(frozen=True, kw_only=True)
+class RobotSighting:
+    """One other robot seen from ours in one frame (robot frame, seed 004 §6.2).
+
+    ``range_m`` (m) and ``bearing_rad`` (rad) locate the robot's centre on the ground; ``cov``
+    (2, 2) is their covariance over ``(range, bearing)``. ``team`` is the waistband's team (0 or
+    1, the world's team ids; ours is 0) or None when no waistband colour was found. ``box`` is
+    the (4,) pixel box ``(u0, v0, u1, v1)`` it was seen in (NaN when not from an image);
+    ``sonar_confirmed`` whether a sonar return confirmed (and set) its range.
+    """
+
+    range_m: float
+    bearing_rad: float
+    cov: FloatArray
+    team: int | None = None
+    box: FloatArray = field(default_factory=lambda: np.full(4, np.nan))
+    sonar_confirmed: bool = False
+    score: float = 1.0
+
+
+@dataclass(frozen=True, kw_only=True)
+class RobotTrack:
+    """One tracked robot in the field frame.
+
+    ``state`` (4,) is ``(x, y, vx, vy)`` (m, m/s) with covariance ``cov`` (4, 4); ``team`` the
+    team by vote of its sightings (None if undecided); ``confirmed`` after enough hits;
+    ``last_seen_s`` the time (s) of its last sighting; ``track_id`` stays with it for life.
+    """
+
+    track_id: int
+    state: FloatArray
+    cov: FloatArray
+    team: int | None
+    confirmed: bool
+    last_seen_s: float
+
+
+@dataclass(frozen=True, kw_only=True)
 class GroundTruth:
     """The true world, for oracle providers only (field frame, SI units).
 
