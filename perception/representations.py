@@ -17,6 +17,8 @@ name                   value
 ``pole_last_seen``     ``Mapping[int, float]``: landmark id -> time (s) of its last sighting
 ``self_pose``          :class:`perception.types.SlamEstimate`: pose, its covariance and
                        the landmark map (field frame)
+``robot_sightings``    ``tuple[RobotSighting, ...]``: other robots seen this frame (robot
+                       frame); no env provides it yet (seed 004 ch. 6 is being built)
 =====================  ================================================================
 """
 
@@ -36,7 +38,15 @@ IMAGE_DETECTIONS = "image_detections"
 POLE_SIGHTINGS = "pole_sightings"
 POLE_LAST_SEEN = "pole_last_seen"
 SELF_POSE = "self_pose"
-REPRESENTATIONS = (ODOMETRY_POSE, IMAGE_DETECTIONS, POLE_SIGHTINGS, POLE_LAST_SEEN, SELF_POSE)
+ROBOT_SIGHTINGS = "robot_sightings"
+REPRESENTATIONS = (
+    ODOMETRY_POSE,
+    IMAGE_DETECTIONS,
+    POLE_SIGHTINGS,
+    POLE_LAST_SEEN,
+    SELF_POSE,
+    ROBOT_SIGHTINGS,
+)
 
 # the SensorFrame fields a provider may read (all but its time and the emulated representations)
 FRAME_INPUTS = tuple(f.name for f in fields(SensorFrame) if f.name not in ("time_s", "emulated"))

@@ -205,12 +205,15 @@ class GroundTruth:
 
     An env fills :attr:`SensorFrame.truth` only when a configured provider requires it, so
     that no other provider can read it. ``robot_pose`` (3,) is the sensing robot's pose;
-    ``landmark_ids`` (L,) int and ``landmarks`` (L, 2) the mapped poles' ids and positions.
+    ``landmark_ids`` (L,) int and ``landmarks`` (L, 2) the mapped poles' ids and positions;
+    ``robots`` (R, 2) the other robots' positions with their ``robot_teams`` (R,) (0 or 1).
     """
 
     robot_pose: FloatArray
     landmark_ids: NDArray[np.int64]
     landmarks: FloatArray
+    robots: FloatArray = field(default_factory=lambda: np.zeros((0, 2)))
+    robot_teams: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
 
 
 @dataclass(frozen=True, kw_only=True)

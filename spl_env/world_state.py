@@ -67,4 +67,6 @@ class WorldState:
             robot_pose=self.poses[robot].copy(),
             landmark_ids=self.landmark_ids.copy(),
             landmarks=self.landmarks.copy(),
+            robots=np.delete(self.poses, robot, axis=0)[:, :2].copy(),
+            robot_teams=np.delete(self.teams, robot),
         )

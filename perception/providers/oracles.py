@@ -13,11 +13,12 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
-from perception.geometry import range_bearing, wrap_angle
+from perception.geometry import FloatArray, range_bearing, wrap_angle
 from perception.providers.base import PerceptionContext, Provider
-from perception.representations import POLE_SIGHTINGS, SELF_POSE, Prior
-from perception.types import GroundTruth, LandmarkObservation, SlamEstimate
+from perception.representations import POLE_SIGHTINGS, ROBOT_SIGHTINGS, SELF_POSE, Prior
+from perception.types import GroundTruth, LandmarkObservation, RobotSighting, SlamEstimate
 from perception.validation import check_positive
 
 
@@ -66,26 +67,80 @@ class OraclePoleSightings(Provider):
         self._prior = prior
 
     def update(self, inputs: Mapping[str, Any], time_s: float) -> tuple[LandmarkObservation, ...]:
-        rng = _rng(self._prior)
         truth: GroundTruth = inputs["truth"]
-        c = self.config
-        if len(truth.landmark_ids) == 0:
-            return ()
-        rb = range_bearing(truth.robot_pose, truth.landmarks)
-        off_axis = np.abs(wrap_angle(rb[:, 1] - inputs["camera_state"].head_yaw))
-        seen = np.flatnonzero((rb[:, 0] <= c.max_range_m) & (off_axis <= self.half_fov_rad))
-        noise = rng.normal(0.0, 1.0, size=(len(seen), 2)) * (c.range_std_m, c.bearing_std_rad)
-        cov = np.diag([c.range_std_m**2, c.bearing_std_rad**2])
+        seen, ranges, bearings, cov = _seen_with_noise(
+            truth.robot_pose,
+            truth.landmarks,
+            inputs["camera_state"].head_yaw,
+            self.half_fov_rad,
+            self.config,
+            _rng(self._prior),
+        )
         sightings = [
             LandmarkObservation(
                 landmark_id=int(truth.landmark_ids[k]),
-                range_m=max(float(rb[k, 0] + n[0]), 1e-3),
-                bearing_rad=float(wrap_angle(rb[k, 1] + n[1])),
+                range_m=r,
+                bearing_rad=b,
                 cov=cov.copy(),
             )
-            for k, n in zip(seen, noise, strict=True)
+            for k, r, b in zip(seen, ranges, bearings, strict=True)
         ]
         return tuple(sorted(sightings, key=lambda s: s.landmark_id))
+
+
+class OracleRobotSightings(Provider):
+    """Every other robot within ``max_range_m`` whose bearing lies inside the camera's
+    horizontal field of view, with Gaussian range and bearing noise, its true team, and no
+    occlusion."""
+
+    provides = ROBOT_SIGHTINGS
+    requires = ("truth", "camera_state")
+
+    def __init__(self, config: OracleConfig, context: PerceptionContext) -> None:
+        self.config = config
+        self.half_fov_rad = math.radians(context.camera.hfov_deg) / 2
+        self._prior: Prior | None = None
+
+    def reset(self, prior: Prior) -> None:
+        self._prior = prior
+
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> tuple[RobotSighting, ...]:
+        truth: GroundTruth = inputs["truth"]
+        seen, ranges, bearings, cov = _seen_with_noise(
+            truth.robot_pose,
+            truth.robots,
+            inputs["camera_state"].head_yaw,
+            self.half_fov_rad,
+            self.config,
+            _rng(self._prior),
+        )
+        return tuple(
+            RobotSighting(range_m=r, bearing_rad=b, cov=cov.copy(), team=int(truth.robot_teams[k]))
+            for k, r, b in zip(seen, ranges, bearings, strict=True)
+        )
+
+
+def _seen_with_noise(
+    pose: FloatArray,
+    points: FloatArray,
+    head_yaw: float,
+    half_fov_rad: float,
+    config: OracleConfig,
+    rng: np.random.Generator,
+) -> tuple[NDArray[np.intp], list[float], list[float], FloatArray]:
+    """Indices of ``points`` (N, 2) (field frame) within ``config.max_range_m`` of ``pose`` (3,)
+    and within ``half_fov_rad`` of the head yaw (rad), their noisy ranges (m) and bearings (rad,
+    robot frame), and the (2, 2) covariance of the noise."""
+    c = config
+    if len(points) == 0:
+        return np.zeros(0, dtype=np.intp), [], [], np.diag([c.range_std_m**2, c.bearing_std_rad**2])
+    rb = range_bearing(pose, points)
+    off_axis = np.abs(wrap_angle(rb[:, 1] - head_yaw))
+    seen = np.flatnonzero((rb[:, 0] <= c.max_range_m) & (off_axis <= half_fov_rad))
+    noise = rng.normal(0.0, 1.0, size=(len(seen), 2)) * (c.range_std_m, c.bearing_std_rad)
+    ranges = [max(float(rb[k, 0] + n[0]), 1e-3) for k, n in zip(seen, noise, strict=True)]
+    bearings = [float(wrap_angle(rb[k, 1] + n[1])) for k, n in zip(seen, noise, strict=True)]
+    return seen, ranges, bearings, np.diag([c.range_std_m**2, c.bearing_std_rad**2])
 
 
 class OracleSelfPose(Provider):

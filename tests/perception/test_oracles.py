@@ -11,7 +11,12 @@ from scipy import stats
 
 from perception.pipeline import PerceptionPipeline, PipelineConfig
 from perception.providers.base import PerceptionContext
-from perception.providers.oracles import OracleConfig, OraclePoleSightings, OracleSelfPose
+from perception.providers.oracles import (
+    OracleConfig,
+    OraclePoleSightings,
+    OracleRobotSightings,
+    OracleSelfPose,
+)
 from perception.representations import POLE_SIGHTINGS, SELF_POSE, Prior
 from perception.types import (
     CameraModel,
@@ -242,3 +247,25 @@ def test_oracle_pipeline_reads_only_truth_and_camera_state() -> None:
     pipeline.reset(np.zeros(3), np.random.default_rng(0))
     with pytest.raises(ValueError, match="truth"):
         pipeline.step(SensorFrame(time_s=0.0, camera_state=camera(0.0)))
+
+
+def test_oracle_robot_sightings_report_the_robots_in_view_with_their_teams() -> None:
+    config = OracleConfig(range_std_m=TINY, bearing_std_rad=TINY, max_range_m=4.0)
+    oracle = OracleRobotSightings(config, context())
+    oracle.reset(Prior(pose=np.zeros(3), rng=np.random.default_rng(0)))
+    # (range m, bearing deg): in view, outside the 30 deg half FOV, too far, in view on the left
+    robots = polar([(1.5, 10.0), (2.0, 40.0), (5.0, 0.0), (3.0, -25.0)])
+    truth = GroundTruth(
+        robot_pose=np.zeros(3),
+        landmark_ids=np.zeros(0, dtype=np.int64),
+        landmarks=np.zeros((0, 2)),
+        robots=robots,
+        robot_teams=np.array([1, 0, 1, 0]),
+    )
+    seen = oracle.update({"truth": truth, "camera_state": camera(0.0)}, 0.0)
+    got = [(s.team, round(s.range_m, 6), round(math.degrees(s.bearing_rad), 6)) for s in seen]
+    assert got == [(1, 1.5, 10.0), (0, 3.0, -25.0)]
+    # turning the head 35 deg left brings the 40 deg robot in and the -25 deg one out
+    seen = oracle.update({"truth": truth, "camera_state": camera(math.radians(35.0))}, 0.1)
+    assert [s.team for s in seen] == [1, 0]
+    assert all(np.allclose(s.cov, np.diag([TINY**2, TINY**2])) for s in seen)

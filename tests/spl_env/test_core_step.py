@@ -250,6 +250,9 @@ def test_world_state_names_every_robot_and_ours_first() -> None:
     np.testing.assert_array_equal(truth.robot_pose, env.robots[2].pose)
     np.testing.assert_array_equal(truth.landmarks, env.scene.landmarks)
     np.testing.assert_array_equal(truth.landmark_ids, env.scene.landmark_ids)
+    others = [r for k, r in enumerate(env.robots) if k != 2]  # everyone but robot 2, in order
+    np.testing.assert_array_equal(truth.robots, [r.pose[:2] for r in others])
+    np.testing.assert_array_equal(truth.robot_teams, [r.team for r in others])
     env.close()
 
 
