@@ -12,8 +12,10 @@ Provider choice, by representation (:data:`PROVIDERS`; the defaults of
 
     image  ──► image_detections [cnn] ──► pole_sightings [cnn | colour | oracle]
                                               │
-    odometry_delta ───────────────────────────┼──► self_pose [ekf_slam | oracle]
-                  └──► odometry_pose            └──► pole_last_seen [history]
+    odometry_delta ───────────────────────────┼──► self_pose [ekf_slam | oracle] ──┐
+                  └──► odometry_pose            └──► pole_last_seen [history]     │
+    image_detections ──► robot_sightings [cnn | oracle] ──────────────────────────┴──►
+        robot_tracks [tracker]        sonar ──► sonar_observations [filter]
 
 A representation an emulator delivers (``emulated``: the geometric camera mode's pole
 sightings) is read from :attr:`perception.types.SensorFrame.emulated` instead of a provider.
@@ -30,13 +32,19 @@ import numpy as np
 from perception.geometry import FloatArray
 from perception.providers.base import PerceptionContext, Provider
 from perception.providers.odometry import DeadReckoning
-from perception.providers.oracles import OracleConfig, OraclePoleSightings, OracleSelfPose
+from perception.providers.oracles import (
+    OracleConfig,
+    OraclePoleSightings,
+    OracleRobotSightings,
+    OracleSelfPose,
+)
 from perception.providers.poles import (
     CnnDetections,
     CnnPoleSightings,
     ColourPoleSightings,
     PoleSightingHistory,
 )
+from perception.providers.robots import CnnRobotSightings, FilteredSonar, TrackedRobots
 from perception.providers.slam import EkfSlamProvider
 from perception.representations import (
     FRAME_INPUTS,
@@ -45,14 +53,20 @@ from perception.representations import (
     POLE_LAST_SEEN,
     POLE_SIGHTINGS,
     REPRESENTATIONS,
+    ROBOT_SIGHTINGS,
+    ROBOT_TRACKS,
     SELF_POSE,
+    SONAR_OBSERVATIONS,
     PerceptionOutput,
     Prior,
 )
 from perception.slam import EkfSlamConfig
+from perception.tracking.robot_tracker import RobotTrackerConfig
+from perception.tracking.sonar_filter import SonarFilterConfig
 from perception.types import SensorFrame
 from perception.validation import check_choice, check_in_interval
 from perception.vision.cnn_detector import CnnDetectorConfig
+from perception.vision.cnn_robots import CnnRobotConfig
 from perception.vision.colour_filter import ColourFilterConfig
 
 ProviderFactory = Callable[["PipelineConfig", PerceptionContext], Provider]
@@ -71,6 +85,12 @@ PROVIDERS: Mapping[str, Mapping[str, ProviderFactory]] = {
         "ekf_slam": lambda c, ctx: EkfSlamProvider(c.slam),
         "oracle": lambda c, ctx: OracleSelfPose(c.oracle),
     },
+    ROBOT_SIGHTINGS: {
+        "cnn": lambda c, ctx: CnnRobotSightings(c.cnn_robots),
+        "oracle": lambda c, ctx: OracleRobotSightings(c.oracle, ctx),
+    },
+    SONAR_OBSERVATIONS: {"filter": lambda c, ctx: FilteredSonar(c.sonar_filter)},
+    ROBOT_TRACKS: {"tracker": lambda c, ctx: TrackedRobots(c.robot_tracker)},
 }
 
 
@@ -102,6 +122,10 @@ class PipelineConfig:
     # The seed's 0.4 m / pi/3 gate. It can lock a badly started landmark out of every
     # correction (seed 000 §4.1); EkfSlamConfig() alone is seed 000's classic Algorithm 5.
     slam: EkfSlamConfig = field(default_factory=lambda: EkfSlamConfig(backend="gated"))
+    robot_sightings: str = "cnn"  # one of PROVIDERS["robot_sightings"]
+    cnn_robots: CnnRobotConfig = field(default_factory=CnnRobotConfig)
+    sonar_filter: SonarFilterConfig = field(default_factory=SonarFilterConfig)
+    robot_tracker: RobotTrackerConfig = field(default_factory=RobotTrackerConfig)
     oracle: OracleConfig = field(default_factory=OracleConfig)
 
     def __post_init__(self) -> None:

@@ -18,7 +18,10 @@ name                   value
 ``self_pose``          :class:`perception.types.SlamEstimate`: pose, its covariance and
                        the landmark map (field frame)
 ``robot_sightings``    ``tuple[RobotSighting, ...]``: other robots seen this frame (robot
-                       frame); no env provides it yet (seed 004 ch. 6 is being built)
+                       frame)
+``sonar_observations`` ``tuple[SonarObservation, ...]``: reliable sonar echo clusters per
+                       sector (seed 004's sonar filter)
+``robot_tracks``       ``tuple[RobotTrack, ...]``: tracked robots (field frame)
 =====================  ================================================================
 """
 
@@ -39,6 +42,8 @@ POLE_SIGHTINGS = "pole_sightings"
 POLE_LAST_SEEN = "pole_last_seen"
 SELF_POSE = "self_pose"
 ROBOT_SIGHTINGS = "robot_sightings"
+SONAR_OBSERVATIONS = "sonar_observations"
+ROBOT_TRACKS = "robot_tracks"
 REPRESENTATIONS = (
     ODOMETRY_POSE,
     IMAGE_DETECTIONS,
@@ -46,6 +51,8 @@ REPRESENTATIONS = (
     POLE_LAST_SEEN,
     SELF_POSE,
     ROBOT_SIGHTINGS,
+    SONAR_OBSERVATIONS,
+    ROBOT_TRACKS,
 )
 
 # the SensorFrame fields a provider may read (all but its time and the emulated representations)

@@ -13,6 +13,7 @@ from gymnasium.envs.registration import register, registry
 
 _ENTRY_POINTS = {
     "SPL/ActiveVision-v0": "spl_env.envs.active_vision:ActiveVisionEnv",
+    "SPL/ActiveVision-v1": "spl_env.envs.active_vision_robots:ActiveVisionRobotsEnv",
     "SPL/LookAround-v0": "spl_env.envs.look_around:LookAroundEnv",
 }
 ENV_IDS: tuple[str, ...] = tuple(_ENTRY_POINTS)

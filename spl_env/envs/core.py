@@ -29,7 +29,12 @@ from perception.providers.base import PerceptionContext
 from perception.representations import POLE_SIGHTINGS, PerceptionOutput
 from perception.types import SensorFrame
 from spl_env.config import SPL_ALIASES, EnvConfig
-from spl_env.envs.info import FULL_INFO_REQUIRES, ground_truth_info, perception_info
+from spl_env.envs.info import (
+    FULL_INFO_REQUIRES,
+    InfoLayout,
+    ground_truth_info,
+    perception_info,
+)
 from spl_env.observations.base import EncoderInput, compose_space, encode_all
 from spl_env.overrides import apply_overrides
 from spl_env.rendering import TopDownView, draw_detections, side_by_side
@@ -97,7 +102,7 @@ class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
         self.observation_space = compose_space(self.encoders)
         self._action_box = self.task.action_space
         self.action_space = self._action_box
-        emulators = emulators_for(self.scene, cfg.sensors, cfg.perception)
+        emulators = emulators_for(self.scene, self.robots, cfg.sensors, cfg.perception)
         outputs = {name for encoder in self.encoders for name in encoder.requires}
         outputs |= set(self.task.reward_requires())
         if cfg.info_level == "full":
@@ -125,6 +130,10 @@ class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
             cfg.sensors,
             self.robots[AGENT],
             {name: emulators[name] for name in self.pipeline.emulated},
+        )
+        self._info_layout = InfoLayout(
+            landmark_ids=self.scene.landmark_ids,
+            max_robots=cfg.perception.robot_tracker.max_tracks,
         )
         self._top_down = TopDownView(self.scene.dimensions)
         self._initial_state = self.world.save_state()
@@ -325,7 +334,7 @@ class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
         state, _, output = self._current()
         info: dict[str, Any] = {"reward_terms": terms}
         if self.config.info_level == "full":
-            info["perception"] = perception_info(output, self.scene.landmark_ids)
+            info["perception"] = perception_info(output, self._info_layout)
             info["ground_truth"] = ground_truth_info(state)
         if self.config.info_timing:
             info["timing"] = dict(times)

@@ -8,13 +8,14 @@ representation, included when the pipeline computes it.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from perception.representations import ODOMETRY_POSE, POLE_SIGHTINGS, SELF_POSE
-from perception.types import LandmarkObservation, SlamEstimate
+from perception.representations import ODOMETRY_POSE, POLE_SIGHTINGS, ROBOT_TRACKS, SELF_POSE
+from perception.types import LandmarkObservation, RobotTrack, SlamEstimate
 from spl_env.world_state import WorldState
 
 
@@ -24,10 +25,20 @@ def _rows(ids: NDArray[np.int64], landmark_ids: NDArray[np.int64]) -> NDArray[np
     return np.array([order[int(i)] for i in ids], dtype=np.intp)
 
 
-def self_pose_info(slam: SlamEstimate, landmark_ids: NDArray[np.int64]) -> dict[str, Any]:
+@dataclass(frozen=True)
+class InfoLayout:
+    """The fixed sizes of an env's ``info``: its poles' ids (L,) in row order and the number of
+    robot-track rows."""
+
+    landmark_ids: NDArray[np.int64]
+    max_robots: int
+
+
+def self_pose_info(slam: SlamEstimate, layout: InfoLayout) -> dict[str, Any]:
     """``pose`` (3,), ``pose_cov`` (3, 3); the map by the env's landmark order (L rows):
     ``landmarks`` (L, 2), ``landmark_covs`` (L, 2, 2), ``landmarks_mapped`` (L,) bool (rows of
     unmapped poles are zero), ``landmark_ids`` (L,)."""
+    landmark_ids = layout.landmark_ids
     n = len(landmark_ids)
     rows = _rows(slam.landmark_ids, landmark_ids)
     landmarks, covs = np.zeros((n, 2)), np.zeros((n, 2, 2))
@@ -44,10 +55,11 @@ def self_pose_info(slam: SlamEstimate, landmark_ids: NDArray[np.int64]) -> dict[
 
 
 def pole_sightings_info(
-    sightings: tuple[LandmarkObservation, ...], landmark_ids: NDArray[np.int64]
+    sightings: tuple[LandmarkObservation, ...], layout: InfoLayout
 ) -> dict[str, Any]:
     """This step's sightings by the env's landmark order: ``sightings`` (L, 2) range (m) and
     bearing (rad, robot frame), ``sighted`` (L,) bool (rows of unseen poles are zero)."""
+    landmark_ids = layout.landmark_ids
     n = len(landmark_ids)
     values, seen = np.zeros((n, 2)), np.zeros(n, dtype=bool)
     ids = np.array([s.landmark_id for s in sightings], dtype=np.int64)
@@ -57,20 +69,47 @@ def pole_sightings_info(
     return {"sightings": values, "sighted": seen}
 
 
-PERCEPTION_INFO: Mapping[str, Callable[[Any, NDArray[np.int64]], dict[str, Any]]] = {
+def robot_tracks_info(tracks: tuple[RobotTrack, ...], layout: InfoLayout) -> dict[str, Any]:
+    """The confirmed robot tracks, ``max_robots`` rows, ordered by track id: ``robots`` (K, 2)
+    positions, ``robot_velocities`` (K, 2), ``robot_covs`` (K, 2, 2) position covariances,
+    ``robot_teams`` (K,) (0 or 1, -1 unknown), ``robot_track_ids`` (K,) and ``robots_tracked``
+    (K,) bool; rows past the last track are zero (ids and teams -1)."""
+    k = layout.max_robots
+    confirmed = sorted((t for t in tracks if t.confirmed), key=lambda t: t.track_id)[:k]
+    info: dict[str, Any] = {
+        "robots": np.zeros((k, 2)),
+        "robot_velocities": np.zeros((k, 2)),
+        "robot_covs": np.zeros((k, 2, 2)),
+        "robot_teams": np.full(k, -1, dtype=np.int64),
+        "robot_track_ids": np.full(k, -1, dtype=np.int64),
+        "robots_tracked": np.zeros(k, dtype=bool),
+    }
+    for row, track in enumerate(confirmed):
+        info["robots"][row] = track.state[:2]
+        info["robot_velocities"][row] = track.state[2:]
+        info["robot_covs"][row] = track.cov[:2, :2]
+        info["robot_teams"][row] = -1 if track.team is None else track.team
+        info["robot_track_ids"][row] = track.track_id
+        info["robots_tracked"][row] = True
+    return info
+
+
+PERCEPTION_INFO: Mapping[str, Callable[[Any, InfoLayout], dict[str, Any]]] = {
     SELF_POSE: self_pose_info,
     POLE_SIGHTINGS: pole_sightings_info,
-    ODOMETRY_POSE: lambda pose, ids: {"odometry_pose": np.asarray(pose).copy()},
+    ODOMETRY_POSE: lambda pose, layout: {"odometry_pose": np.asarray(pose).copy()},
+    ROBOT_TRACKS: robot_tracks_info,
 }
-FULL_INFO_REQUIRES = tuple(PERCEPTION_INFO)
+# what the full info always reads; robot tracks join where the env's task already tracks robots
+FULL_INFO_REQUIRES = (SELF_POSE, POLE_SIGHTINGS, ODOMETRY_POSE)
 
 
-def perception_info(output: Mapping[str, Any], landmark_ids: NDArray[np.int64]) -> dict[str, Any]:
+def perception_info(output: Mapping[str, Any], layout: InfoLayout) -> dict[str, Any]:
     """``info["perception"]``: the entries of every representation in ``output`` that has some."""
     info: dict[str, Any] = {}
     for name, entries in PERCEPTION_INFO.items():
         if name in output:
-            info.update(entries(output[name], landmark_ids))
+            info.update(entries(output[name], layout))
     return info
 
 

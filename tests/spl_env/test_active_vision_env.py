@@ -101,6 +101,17 @@ def test_info_contract(env: gym.Env) -> None:
         "sightings": (n, 2),
         "sighted": (n,),
     }
+    tracks_robots = env.spec is not None and env.spec.id == "SPL/ActiveVision-v1"
+    if tracks_robots:  # v1 adds the confirmed robot tracks, 16 rows
+        k = env.unwrapped.config.perception.robot_tracker.max_tracks
+        shapes |= {
+            "robots": (k, 2),
+            "robot_velocities": (k, 2),
+            "robot_covs": (k, 2, 2),
+            "robot_teams": (k,),
+            "robot_track_ids": (k,),
+            "robots_tracked": (k,),
+        }
     assert {k: v.shape for k, v in per.items()} == shapes
     assert per["landmarks_mapped"].dtype == np.bool_ and per["sighted"].dtype == np.bool_
     assert np.all(per["landmarks"][~per["landmarks_mapped"]] == 0.0)
@@ -122,7 +133,8 @@ def test_info_contract(env: gym.Env) -> None:
     for part in ("perception", "ground_truth"):
         for key, value in info[part].items():
             assert np.shape(first[part][key]) == np.shape(value), key
-    assert set(info["reward_terms"]) == {"position_error", "uncertainty"}
+    terms = {"position_error", "uncertainty"} | ({"robot_awareness"} if tracks_robots else set())
+    assert set(info["reward_terms"]) == terms
 
 
 def test_truncates_after_episode_length(env: gym.Env) -> None:
@@ -188,13 +200,14 @@ def test_make_kwargs_override_config_fields() -> None:
 
 def test_every_id_is_registered_with_its_own_env_class() -> None:
     from spl_env.envs.active_vision import ActiveVisionEnv
+    from spl_env.envs.active_vision_robots import ActiveVisionRobotsEnv
     from spl_env.envs.look_around import LookAroundEnv
 
-    assert ENV_IDS == ("SPL/ActiveVision-v0", "SPL/LookAround-v0")
+    assert ENV_IDS == ("SPL/ActiveVision-v0", "SPL/ActiveVision-v1", "SPL/LookAround-v0")
     classes = []
     for env_id in ENV_IDS:
         e = gym.make(env_id, **FAST)
         classes.append(type(e.unwrapped))
         assert e.spec is not None and e.spec.id == env_id
         e.close()
-    assert classes == [ActiveVisionEnv, LookAroundEnv]
+    assert classes == [ActiveVisionEnv, ActiveVisionRobotsEnv, LookAroundEnv]

@@ -180,7 +180,9 @@ def test_light_info_has_only_reward_terms(env_id: str) -> None:
     for _ in range(3):
         obs, reward, _, _, info = env.step(env.action_space.sample())
         assert set(info) == {"reward_terms"}
-        assert set(info["reward_terms"]) == {"position_error", "uncertainty"}
+        localisation = {"position_error", "uncertainty"}
+        awareness = {"robot_awareness"} if env_id == "SPL/ActiveVision-v1" else set()
+        assert set(info["reward_terms"]) == localisation | awareness
         assert reward == pytest.approx(sum(info["reward_terms"].values()))
         assert env.observation_space.contains(obs)
     env.close()

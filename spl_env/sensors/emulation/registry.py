@@ -10,17 +10,19 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 
 from perception.pipeline import PipelineConfig
-from perception.representations import POLE_SIGHTINGS
+from perception.representations import POLE_SIGHTINGS, ROBOT_SIGHTINGS
 from perception.vision.colour_filter import ColourPoleDetector
+from spl_env.robots.nao import NaoRobot
 from spl_env.scenes.spl_field import SplFieldScene
 from spl_env.sensors.emulation.poles import GeometricPoleCamera, GeometricPoleSightings
+from spl_env.sensors.emulation.robots import GeometricRobotSightings
 from spl_env.sensors.rig import Emulator, RigConfig
 
-EmulatorFactory = Callable[[SplFieldScene, RigConfig, PipelineConfig], Emulator]
+EmulatorFactory = Callable[[SplFieldScene, list[NaoRobot], RigConfig, PipelineConfig], Emulator]
 
 
 def _colour_pole_sightings(
-    scene: SplFieldScene, sensors: RigConfig, perception: PipelineConfig
+    scene: SplFieldScene, robots: list[NaoRobot], sensors: RigConfig, perception: PipelineConfig
 ) -> GeometricPoleSightings:
     model, geometry = sensors.camera.model, scene.config.poles.geometry
     camera = GeometricPoleCamera.for_scene(scene, sensors.geometric_camera, model)
@@ -28,21 +30,28 @@ def _colour_pole_sightings(
     return GeometricPoleSightings(camera, detector)
 
 
+def _cnn_robot_sightings(
+    scene: SplFieldScene, robots: list[NaoRobot], sensors: RigConfig, perception: PipelineConfig
+) -> GeometricRobotSightings:
+    return GeometricRobotSightings(sensors.geometric_robots, sensors.camera.model, robots)
+
+
 # (representation, the provider it emulates) -> how to build the emulator
 EMULATORS: Mapping[tuple[str, str], EmulatorFactory] = {
     (POLE_SIGHTINGS, "colour"): _colour_pole_sightings,
+    (ROBOT_SIGHTINGS, "cnn"): _cnn_robot_sightings,
 }
 
 
 def emulators_for(
-    scene: SplFieldScene, sensors: RigConfig, perception: PipelineConfig
+    scene: SplFieldScene, robots: list[NaoRobot], sensors: RigConfig, perception: PipelineConfig
 ) -> dict[str, Emulator]:
     """Representation -> emulator for every configured provider that has one, in the geometric
-    camera mode (none in the rendered mode)."""
+    camera mode (none in the rendered mode); ``robots`` are the world's robots."""
     if sensors.camera_mode != "geometric":
         return {}
     return {
-        representation: factory(scene, sensors, perception)
+        representation: factory(scene, robots, sensors, perception)
         for (representation, provider), factory in EMULATORS.items()
         if perception.provider_name(representation) == provider
     }
