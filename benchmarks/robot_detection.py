@@ -19,12 +19,13 @@ from our robot) and the renderer's body-id labels (``env.unwrapped.rig.camera_vi
 
 A detection is a true positive if it matches a visible robot: greedily by bearing error, within
 ``MATCH_BEARING_DEG`` and ``MATCH_RANGE_FRACTION`` of the true range, or within ``MATCH_MIN_M``
-sideways and in range (one detection per robot);
-otherwise a false positive, classified by the body most labelled in its box's lower half. Recall
-counts robots in view (by true range band); precision counts detections (by measured range band),
-also for the team-coloured detections alone (what vision keeps without a sonar confirmation,
-Algorithm 2 lines 16-17). Robots partly visible (visible, not in view) are "don't care": found or
-missed, they count in neither recall nor, when found, as false positives.
+sideways and in range (one detection per robot); otherwise a false positive, classified by the
+body most labelled in its box's lower half. Recall counts robots in view by their true range's
+band; precision counts detections in the band of their robot's true range and in that of their
+measured range (a false positive: the latter only), also for the team-coloured detections alone
+(``team_precision``: what vision keeps without a sonar confirmation, Algorithm 2 lines 16-17;
+a detection of the wrong team counts as false). Robots partly visible (visible, not in view) are
+"don't care": found or missed, they count in neither recall nor, when found, as false positives.
 
 Tuned on seeds 0-9 (``--seeds 0-9``); the published figures are on seeds 100-109 (the default),
 under default and randomised lighting (``--lighting both``, the default)::

@@ -10,14 +10,15 @@ coordinates, where pixel (i, j) is centred at (u, v) = (i, j)):
 1. **Field boundary.** Every ``column_step_px`` columns, the carpet's top edge ``raw``: the
    row that best splits the column into non-carpet above and carpet below (the maximum over
    rows of the count of carpet minus non-carpet pixels below it, so that small clutter does not
-   end the carpet). Carpet is ``green_hsv``, and white (``white_hsv``) in vertical runs no
-   longer than ``line_thin_factor`` field lines across the view: a line lying on the carpet
-   is carpet, a robot's grey legs are not. Rows more than ``horizon_margin_px`` above the
-   horizon are never carpet. After a median over ``median_columns`` columns, the greatest
-   convex minorant in image rows (the carpet is convex, so its top edge is a convex function of
-   the column; this is its upper envelope) is the boundary ``smooth`` that bridges the
-   indents. A hull vertex with little support among its neighbours (green clutter above the
-   carpet, ``spike_*``) is dropped.
+   end the carpet). Carpet is ``green_hsv`` (its saturation floor lowered per column where a
+   window's glare washes the carpet out, ``glare_saturation_ratio``), and white
+   (``white_hsv``) in vertical runs no longer than ``line_thin_factor`` field lines across
+   the view: a line lying on the carpet is carpet, a robot's grey legs are not. Rows more
+   than ``horizon_margin_px`` above the horizon are never carpet. After a median over
+   ``median_columns`` columns, the greatest convex minorant in image rows (the carpet is
+   convex, so its top edge is a convex function of the column; this is its upper envelope) is
+   the boundary ``smooth`` that bridges the indents. A hull vertex with little support among
+   its neighbours (green clutter above the carpet, ``spike_*``) is dropped.
 2. **Indents.** A column is indented where ``raw`` lies ``min_indent_px`` or more below
    ``smooth`` (gaps of fewer than ``gap_columns`` columns bridged); the rows between show what
    stands in front of the carpet's edge, ``raw`` is its bottom. A run of indented columns is
@@ -118,6 +119,9 @@ class RobotDetectorConfig:
     """
 
     green_hsv: HsvRange = ((52, 80, 30), (72, 255, 255))
+    glare_saturation_ratio: float = 0.6  # under glare, carpet down to this of its median S ...
+    min_green_saturation: int = 40  # ... but no less than this
+    min_glare_samples: int = 10  # carpet-hued pixels in a column's lower third to judge glare
     white_hsv: HsvRange = ((0, 0, 90), (179, 60, 255))  # field lines (and robots' grey)
     line_width_m: float = 0.05  # field line width
     line_thin_factor: float = 2.0  # white runs up to this many line widths are carpet
@@ -186,9 +190,10 @@ class RobotDetectorConfig:
         check_int(_OWNER, "median_columns", self.median_columns, 1)
         check_int(_OWNER, "gap_columns", self.gap_columns, 1)
         check_int(_OWNER, "spike_columns", self.spike_columns, 0)
+        check_int(_OWNER, "min_green_saturation", self.min_green_saturation, 0)
         if self.median_columns % 2 == 0:
             raise ValueError(f"{_OWNER}.median_columns must be odd, got {self.median_columns}")
-        for name in ("min_indent_px", "min_waistband_px", "pole_min_px"):
+        for name in ("min_indent_px", "min_waistband_px", "pole_min_px", "min_glare_samples"):
             check_int(_OWNER, name, getattr(self, name), 1)
         check_int(_OWNER, "bottom_margin_px", self.bottom_margin_px, 0)
         check_int(_OWNER, "side_margin_px", self.side_margin_px, 0)
@@ -205,6 +210,7 @@ class RobotDetectorConfig:
         for name in (
             "shrink_green_fraction",
             "spike_support",
+            "glare_saturation_ratio",
         ):
             check_in_interval(_OWNER, name, getattr(self, name), 0.0, 1.0, high_inclusive=True)
         for name in (
@@ -287,7 +293,8 @@ class FieldBoundary:
     rows between are what stands in front of the carpet's edge, ``raw`` its bottom.
     ``line_limit`` (H,) is the longest vertical white run (px) ending at each image row that
     counts as a field line, i.e. as carpet; ``row_distance`` (H,) the ground distance (m) from
-    the camera seen at each row (centre column; inf above the horizon).
+    the camera seen at each row (centre column; inf above the horizon); ``saturation_floor``
+    (C,) the least saturation of carpet green in each sampled column (lower under glare).
     """
 
     columns: NDArray[np.intp]
@@ -295,6 +302,7 @@ class FieldBoundary:
     smooth: FloatArray
     line_limit: FloatArray
     row_distance: FloatArray
+    saturation_floor: FloatArray
 
 
 @dataclass(frozen=True)
@@ -338,7 +346,6 @@ class RobotDetector:
         self.camera = camera
         step = config.column_step_px
         self._columns = np.arange(step // 2, camera.width, step, dtype=np.intp)
-        self._green = tuple(np.array(b, dtype=np.uint8) for b in config.green_hsv)
         self._white = tuple(np.array(b, dtype=np.uint8) for b in config.white_hsv)
         self._rotation_of: CameraState | None = None  # a one-frame cache of the rotation
         self._rotation_value = np.eye(3)
@@ -373,8 +380,9 @@ class RobotDetector:
         height = self.camera.height
         columns = self._columns
         strip = np.ascontiguousarray(image[:, columns])
-        hsv = cv2.cvtColor(strip, cv2.COLOR_RGB2HSV)
-        green = np.asarray(cv2.inRange(hsv, *self._green), dtype=bool)  # (H, C)
+        hsv = np.asarray(cv2.cvtColor(strip, cv2.COLOR_RGB2HSV), dtype=np.uint8)
+        floor = self._saturation_floor(hsv)
+        green = self._carpet_green(hsv, floor)  # (H, C)
         white = np.asarray(cv2.inRange(hsv, *self._white), dtype=bool)
         line_limit, row_distance = self._line_limits(state)
         green |= white & _thin_runs(white, line_limit)  # field lines are carpet here
@@ -399,6 +407,44 @@ class RobotDetector:
             ),
             line_limit=line_limit,
             row_distance=row_distance,
+            saturation_floor=floor,
+        )
+
+    def _saturation_floor(self, hsv: NDArray[np.uint8]) -> FloatArray:
+        """The least saturation (C,) of carpet green in each column of ``hsv`` (H, C, 3).
+
+        ``green_hsv``'s, but lower where a window's glare washes the carpet out: at most
+        ``glare_saturation_ratio`` of the median saturation of the carpet-hued pixels in the
+        column's lower third (the carpet there, where there are ``min_glare_samples`` of
+        them), down to ``min_green_saturation``.
+        """
+        cfg = self.config
+        (h_lo, s_lo, v_lo), (h_hi, _, _) = cfg.green_hsv
+        lower = hsv[2 * hsv.shape[0] // 3 :].astype(np.float64)
+        hued = (lower[..., 0] >= h_lo) & (lower[..., 0] <= h_hi) & (lower[..., 2] >= v_lo)
+        hued &= lower[..., 1] >= cfg.min_green_saturation
+        sat = np.where(hued, lower[..., 1], np.nan)
+        enough = hued.sum(axis=0) >= cfg.min_glare_samples
+        median = np.full(hsv.shape[1], np.inf)
+        if enough.any():
+            median[enough] = np.nanmedian(sat[:, enough], axis=0)
+        floor: FloatArray = np.clip(
+            cfg.glare_saturation_ratio * median, cfg.min_green_saturation, s_lo
+        )
+        return floor
+
+    def _carpet_green(self, hsv: NDArray[np.uint8], floor: FloatArray) -> NDArray[np.bool_]:
+        """Pixels (H, W) of ``hsv`` (H, W, 3) in ``green_hsv`` with the saturation floor
+        ``floor`` (W,) per column instead of its own."""
+        (h_lo, _, v_lo), (h_hi, s_hi, v_hi) = self.config.green_hsv
+        h, s, v = hsv[..., 0], hsv[..., 1], hsv[..., 2]
+        return (
+            (h >= h_lo)
+            & (h <= h_hi)
+            & (v >= v_lo)
+            & (v <= v_hi)
+            & (s <= s_hi)
+            & (s >= floor[None, :])
         )
 
     # ----- steps --------------------------------------------------------------------------
@@ -544,9 +590,11 @@ class RobotDetector:
             return []
         # carpet: green, or white in runs no longer than a field line (computed from the image
         # top, so that runs through the boundary keep their length)
-        hsv = cv2.cvtColor(np.ascontiguousarray(image[: v1 + 1, u0 : u1 + 1]), cv2.COLOR_RGB2HSV)
+        window = np.ascontiguousarray(image[: v1 + 1, u0 : u1 + 1])
+        hsv = np.asarray(cv2.cvtColor(window, cv2.COLOR_RGB2HSV), dtype=np.uint8)
         white = np.asarray(cv2.inRange(hsv, *self._white), dtype=bool)
-        green = np.asarray(cv2.inRange(hsv, *self._green), dtype=bool)
+        floor = np.interp(np.arange(u0, u1 + 1), boundary.columns, boundary.saturation_floor)
+        green = self._carpet_green(hsv, floor)
         green = (green | (white & _thin_runs(white, boundary.line_limit[: v1 + 1])))[v0:]
         # line 3: shrink the bottom and sides while mostly green
         top, bottom, left, right = 0, green.shape[0] - 1, 0, green.shape[1] - 1

@@ -272,6 +272,23 @@ def test_robot_cut_at_the_bottom_without_waistband_keeps_its_base(detector: Robo
     assert kept[0].sighting.range_m > robot.range_bearing[0]
 
 
+def test_robot_in_a_window_glare_is_found(detector: RobotDetector) -> None:
+    glare = np.linspace(0.0, 0.5, CAMERA.width)[None, :, None]  # washed out to the right
+
+    def washed(image: np.ndarray) -> np.ndarray:
+        return np.clip(image * (1 - glare) + 255 * glare, 0, 255).astype(np.uint8)
+
+    robot = Robot(2.0, -0.5, 1)
+    image = washed(draw([robot]))
+    hsv = cv2.cvtColor(image, cv2.COLOR_RGB2HSV)
+    assert hsv[-1, -1, 1] < RobotDetectorConfig().green_hsv[0][1]  # the carpet: below the floor
+    assert detector.detect(washed(draw()), STATE) == []
+    sightings = detector.detect(image, STATE)
+    assert len(sightings) == 1
+    assert sightings[0].team == 1
+    assert abs(sightings[0].range_m - robot.range_bearing[0]) < 0.05 * robot.range_bearing[0]
+
+
 def test_covariance_grows_with_range(detector: RobotDetector) -> None:
     near = detector.detect(draw([Robot(1.0, 0.0, 0)]), STATE)[0]
     far = detector.detect(draw([Robot(3.5, 0.0, 0)]), STATE)[0]
