@@ -25,6 +25,7 @@ from perception.geometry import FloatArray
 _REAL = (int, float, np.integer, np.floating)  # a bool is excluded separately
 _INT = (int, np.integer)
 _SYMMETRY_RTOL = 1e-9  # covariance entries (i, j) and (j, i) may differ by this relative amount
+_PSD_RTOL = 1e-12  # a semidefinite covariance's eigenvalues may dip this far below zero
 _SYMMETRY_ATOL = 1e-15  # ... plus this absolute amount (entries near zero)
 
 
@@ -163,11 +164,15 @@ def finite_vector(value: ArrayLike, name: str, size: int) -> FloatArray:
     return array
 
 
-def check_covariance(matrix: ArrayLike, name: str, size: int) -> FloatArray:
+def check_covariance(
+    matrix: ArrayLike, name: str, size: int, *, singular_ok: bool = False
+) -> FloatArray:
     """``matrix`` as a new float64 (size, size) array; raise unless it is a covariance.
 
     A covariance here is finite, symmetric (entries (i, j) and (j, i) agree to a relative 1e-9)
-    and positive definite. Errors name the argument ``name``.
+    and positive definite, or with ``singular_ok`` positive semidefinite (its eigenvalues may
+    dip a relative 1e-12 below zero; the returned array is then symmetrised). Errors name the
+    argument ``name``.
     """
     try:
         C = np.array(matrix, dtype=np.float64)
@@ -176,6 +181,14 @@ def check_covariance(matrix: ArrayLike, name: str, size: int) -> FloatArray:
         raise InvalidTypeError(f"{name} must be {expected}, got {matrix!r}") from error
     if C.shape != (size, size) or not np.isfinite(C).all():
         raise ValueError(f"{name} must be a finite ({size}, {size}) array, got {C!r}")
+    if singular_ok:
+        tolerance = _SYMMETRY_RTOL * np.maximum(np.abs(C), np.abs(C.T))
+        if not (np.abs(C - C.T) <= tolerance).all():
+            raise ValueError(f"{name} must be symmetric, got {C.tolist()}")
+        C = 0.5 * (C + C.T)
+        if float(np.linalg.eigvalsh(C).min()) < -_PSD_RTOL * float(np.abs(C).max()):
+            raise ValueError(f"{name} must be positive semidefinite, got {C.tolist()}")
+        return C
     if size == 2:  # plain floats: much faster than numpy for the many 2 x 2 measurement checks
         (a, b), (c, d) = C.tolist()
         symmetric = abs(b - c) <= _SYMMETRY_RTOL * max(abs(b), abs(c)) + _SYMMETRY_ATOL

@@ -45,109 +45,8 @@ class OracleConfig:
             check_positive("OracleConfig", name, getattr(self, name))
 
 
-def _rng(prior: Prior | None) -> np.random.Generator:
-    if prior is None:
-        raise RuntimeError("an oracle provider must be reset() with the episode's prior first")
-    return prior.rng
-
-
-class OraclePoleSightings(Provider):
-    """Every pole within ``max_range_m`` whose bearing lies inside the camera's horizontal
-    field of view (from the head yaw), with Gaussian range and bearing noise; no occlusion."""
-
-    provides = POLE_SIGHTINGS
-    requires = ("truth", "camera_state")
-
-    def __init__(self, config: OracleConfig, context: PerceptionContext) -> None:
-        self.config = config
-        self.half_fov_rad = math.radians(context.camera.hfov_deg) / 2
-        self._prior: Prior | None = None
-
-    def reset(self, prior: Prior) -> None:
-        self._prior = prior
-
-    def update(self, inputs: Mapping[str, Any], time_s: float) -> tuple[LandmarkObservation, ...]:
-        truth: GroundTruth = inputs["truth"]
-        seen, ranges, bearings, cov = _seen_with_noise(
-            truth.robot_pose,
-            truth.landmarks,
-            inputs["camera_state"].head_yaw,
-            self.half_fov_rad,
-            self.config,
-            _rng(self._prior),
-        )
-        sightings = [
-            LandmarkObservation(
-                landmark_id=int(truth.landmark_ids[k]),
-                range_m=r,
-                bearing_rad=b,
-                cov=cov.copy(),
-            )
-            for k, r, b in zip(seen, ranges, bearings, strict=True)
-        ]
-        return tuple(sorted(sightings, key=lambda s: s.landmark_id))
-
-
-class OracleRobotSightings(Provider):
-    """Every other robot within ``max_range_m`` whose bearing lies inside the camera's
-    horizontal field of view, with Gaussian range and bearing noise, its true team, and no
-    occlusion."""
-
-    provides = ROBOT_SIGHTINGS
-    requires = ("truth", "camera_state")
-
-    def __init__(self, config: OracleConfig, context: PerceptionContext) -> None:
-        self.config = config
-        self.half_fov_rad = math.radians(context.camera.hfov_deg) / 2
-        self._prior: Prior | None = None
-
-    def reset(self, prior: Prior) -> None:
-        self._prior = prior
-
-    def update(self, inputs: Mapping[str, Any], time_s: float) -> tuple[RobotSighting, ...]:
-        truth: GroundTruth = inputs["truth"]
-        seen, ranges, bearings, cov = _seen_with_noise(
-            truth.robot_pose,
-            truth.robots,
-            inputs["camera_state"].head_yaw,
-            self.half_fov_rad,
-            self.config,
-            _rng(self._prior),
-        )
-        return tuple(
-            RobotSighting(range_m=r, bearing_rad=b, cov=cov.copy(), team=int(truth.robot_teams[k]))
-            for k, r, b in zip(seen, ranges, bearings, strict=True)
-        )
-
-
-def _seen_with_noise(
-    pose: FloatArray,
-    points: FloatArray,
-    head_yaw: float,
-    half_fov_rad: float,
-    config: OracleConfig,
-    rng: np.random.Generator,
-) -> tuple[NDArray[np.intp], list[float], list[float], FloatArray]:
-    """Indices of ``points`` (N, 2) (field frame) within ``config.max_range_m`` of ``pose`` (3,)
-    and within ``half_fov_rad`` of the head yaw (rad), their noisy ranges (m) and bearings (rad,
-    robot frame), and the (2, 2) covariance of the noise."""
-    c = config
-    if len(points) == 0:
-        return np.zeros(0, dtype=np.intp), [], [], np.diag([c.range_std_m**2, c.bearing_std_rad**2])
-    rb = range_bearing(pose, points)
-    off_axis = np.abs(wrap_angle(rb[:, 1] - head_yaw))
-    seen = np.flatnonzero((rb[:, 0] <= c.max_range_m) & (off_axis <= half_fov_rad))
-    noise = rng.normal(0.0, 1.0, size=(len(seen), 2)) * (c.range_std_m, c.bearing_std_rad)
-    ranges = [max(float(rb[k, 0] + n[0]), 1e-3) for k, n in zip(seen, noise, strict=True)]
-    bearings = [float(wrap_angle(rb[k, 1] + n[1])) for k, n in zip(seen, noise, strict=True)]
-    return seen, ranges, bearings, np.diag([c.range_std_m**2, c.bearing_std_rad**2])
-
-
-class OracleSelfPose(Provider):
-    """The true pose and pole map with Gaussian noise and the matching diagonal covariances."""
-
-    provides = SELF_POSE
-    requires = ("truth",)
+class _Oracle(Provider):
+    """An oracle keeps the episode's prior for its generator."""
 
     def __init__(self, config: OracleConfig) -> None:
         self.config = config
@@ -156,8 +55,84 @@ class OracleSelfPose(Provider):
     def reset(self, prior: Prior) -> None:
         self._prior = prior
 
+    @property
+    def rng(self) -> np.random.Generator:
+        """The generator of the episode's prior."""
+        if self._prior is None:
+            raise RuntimeError("an oracle provider must be reset() with the episode's prior first")
+        return self._prior.rng
+
+
+class _InViewOracle(_Oracle):
+    """An oracle of things seen by the camera: those within ``max_range_m`` whose bearing lies
+    inside the horizontal field of view around the head yaw, with Gaussian noise."""
+
+    requires = ("truth", "camera_state")
+
+    def __init__(self, config: OracleConfig, context: PerceptionContext) -> None:
+        super().__init__(config)
+        self.half_fov_rad = math.radians(context.camera.hfov_deg) / 2
+
+    def seen(
+        self, inputs: Mapping[str, Any], points: FloatArray
+    ) -> tuple[NDArray[np.intp], list[float], list[float], FloatArray]:
+        """Indices of ``points`` (N, 2) (field frame) in view, their noisy ranges (m) and
+        bearings (rad, robot frame), and the (2, 2) covariance of the noise."""
+        truth: GroundTruth = inputs["truth"]
+        c = self.config
+        cov = np.diag([c.range_std_m**2, c.bearing_std_rad**2])
+        if len(points) == 0:
+            return np.zeros(0, dtype=np.intp), [], [], cov
+        rb = range_bearing(truth.robot_pose, points)
+        off_axis = np.abs(wrap_angle(rb[:, 1] - inputs["camera_state"].head_yaw))
+        seen = np.flatnonzero((rb[:, 0] <= c.max_range_m) & (off_axis <= self.half_fov_rad))
+        noise = self.rng.normal(0.0, 1.0, size=(len(seen), 2)) * (c.range_std_m, c.bearing_std_rad)
+        ranges = [max(float(rb[k, 0] + n[0]), 1e-3) for k, n in zip(seen, noise, strict=True)]
+        bearings = [float(wrap_angle(rb[k, 1] + n[1])) for k, n in zip(seen, noise, strict=True)]
+        return seen, ranges, bearings, cov
+
+
+class OraclePoleSightings(_InViewOracle):
+    """Every pole in view (:class:`_InViewOracle`), with Gaussian range and bearing noise; no
+    occlusion."""
+
+    provides = POLE_SIGHTINGS
+
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> tuple[LandmarkObservation, ...]:
+        truth: GroundTruth = inputs["truth"]
+        seen, ranges, bearings, cov = self.seen(inputs, truth.landmarks)
+        sightings = [
+            LandmarkObservation(
+                landmark_id=int(truth.landmark_ids[k]), range_m=r, bearing_rad=b, cov=cov.copy()
+            )
+            for k, r, b in zip(seen, ranges, bearings, strict=True)
+        ]
+        return tuple(sorted(sightings, key=lambda s: s.landmark_id))
+
+
+class OracleRobotSightings(_InViewOracle):
+    """Every other robot in view (:class:`_InViewOracle`), with Gaussian range and bearing
+    noise and its true team; no occlusion."""
+
+    provides = ROBOT_SIGHTINGS
+
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> tuple[RobotSighting, ...]:
+        truth: GroundTruth = inputs["truth"]
+        seen, ranges, bearings, cov = self.seen(inputs, truth.robots)
+        return tuple(
+            RobotSighting(range_m=r, bearing_rad=b, cov=cov.copy(), team=int(truth.robot_teams[k]))
+            for k, r, b in zip(seen, ranges, bearings, strict=True)
+        )
+
+
+class OracleSelfPose(_Oracle):
+    """The true pose and pole map with Gaussian noise and the matching diagonal covariances."""
+
+    provides = SELF_POSE
+    requires = ("truth",)
+
     def update(self, inputs: Mapping[str, Any], time_s: float) -> SlamEstimate:
-        rng = _rng(self._prior)
+        rng = self.rng
         truth: GroundTruth = inputs["truth"]
         c = self.config
         pose_std = np.array([c.position_std_m, c.position_std_m, c.heading_std_rad])

@@ -52,7 +52,6 @@ from perception.estimation.kalman import joseph_update, predict
 from perception.geometry import FloatArray
 from perception.types import RobotSighting, RobotTrack, SlamEstimate
 from perception.validation import (
-    InvalidTypeError,
     check_covariance,
     check_finite,
     check_int,
@@ -62,8 +61,6 @@ from perception.validation import (
 )
 
 _H = np.hstack([np.eye(2), np.zeros((2, 2))])  # H (2, 4): the position part of x
-_PSD_RTOL = 1e-12  # a pose covariance's eigenvalues may dip this far (relative) below zero
-_SYMMETRY_RTOL = 1e-9  # as perception.validation.check_covariance
 
 SelfPose: TypeAlias = SlamEstimate | tuple[ArrayLike, ArrayLike]
 """The sensing robot's pose: a :class:`SlamEstimate`, or ``(pose (3,), pose_cov (3, 3))``."""
@@ -376,27 +373,4 @@ def _checked_pose(self_pose: object) -> tuple[FloatArray, FloatArray]:
             f"got {type(self_pose).__name__}"
         )
     pose = finite_vector(values[0], names[0], 3)
-    return pose, _psd_covariance(values[1], names[1], 3)
-
-
-def _psd_covariance(matrix: object, name: str, size: int) -> FloatArray:
-    """``matrix`` as a symmetrised float64 (size, size) array; raise unless symmetric PSD.
-
-    Unlike :func:`perception.validation.check_covariance`, a singular matrix (zero for an
-    exactly known pose) is allowed.
-    """
-    try:
-        C = np.array(matrix, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        expected = f"a ({size}, {size}) array"
-        raise InvalidTypeError(f"{name} must be {expected}, got {matrix!r}") from error
-    if C.shape != (size, size) or not np.isfinite(C).all():
-        raise ValueError(f"{name} must be a finite ({size}, {size}) array, got {C!r}")
-    tolerance = _SYMMETRY_RTOL * np.maximum(np.abs(C), np.abs(C.T))
-    if not (np.abs(C - C.T) <= tolerance).all():
-        raise ValueError(f"{name} must be symmetric, got {C.tolist()}")
-    C = 0.5 * (C + C.T)
-    scale = float(np.abs(C).max())
-    if float(np.linalg.eigvalsh(C).min()) < -_PSD_RTOL * scale:
-        raise ValueError(f"{name} must be positive semidefinite, got {C.tolist()}")
-    return C
+    return pose, check_covariance(values[1], names[1], 3, singular_ok=True)

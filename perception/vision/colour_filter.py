@@ -108,7 +108,7 @@ class ColourFilterConfig:
 
     def __post_init__(self) -> None:
         for colour in (*_SEGMENT_COLOURS, "white"):
-            _check_hsv_range(f"{colour}_hsv", self.hsv_range(colour))
+            check_hsv_range("ColourFilterConfig", f"{colour}_hsv", self.hsv_range(colour))
         check_int(_OWNER, "min_segment_area_px", self.min_segment_area_px, 1)
         for name in ("search_distance_factor", "max_height_mismatch"):
             check_in_interval(_OWNER, name, getattr(self, name), 1.0, math.inf)
@@ -143,18 +143,19 @@ class ColourFilterConfig:
         return value
 
 
-def _check_hsv_range(name: str, value: HsvRange) -> None:
-    """Raise ``ValueError`` unless ``value`` is a valid :data:`HsvRange` (field ``name``)."""
+def check_hsv_range(owner: str, name: str, value: HsvRange) -> None:
+    """Raise ``ValueError`` naming ``owner.name`` unless ``value`` is a valid :data:`HsvRange`:
+    two (h, s, v) tuples of ints (not bools), low <= high, within OpenCV's HSV bounds."""
     ok = (
         isinstance(value, tuple)
         and len(value) == 2
         and all(isinstance(b, tuple) and len(b) == 3 for b in value)
-        and all(isinstance(x, int) for b in value for x in b)
+        and all(isinstance(x, int) and not isinstance(x, bool) for b in value for x in b)
         and all(0 <= lo <= hi <= top for lo, hi, top in zip(*value, _HSV_MAX, strict=True))
     )
     if not ok:
         raise ValueError(
-            f"ColourFilterConfig.{name} must be ((h, s, v), (h, s, v)) ints with "
+            f"{owner}.{name} must be ((h, s, v), (h, s, v)) ints with "
             f"0 <= low <= high <= {_HSV_MAX}, got {value!r}"
         )
 

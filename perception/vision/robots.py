@@ -87,12 +87,11 @@ from scipy.ndimage import grey_closing, median_filter
 from perception.geometry import FloatArray, pixel_rays, project_points, ray_ground_intersection
 from perception.types import CameraModel, CameraState, RobotSighting
 from perception.validation import check_in_interval, check_int, check_positive
+from perception.vision.colour_filter import HsvRange, check_hsv_range
 from perception.vision.ground_point import ground_point, height_point, range_bearing_cov
 
-HsvRange = tuple[tuple[int, int, int], tuple[int, int, int]]
 """Inclusive ``((h, s, v) low, (h, s, v) high)`` bounds, OpenCV convention (H 0-179)."""
 
-_HSV_MAX = (179, 255, 255)
 _OWNER = "RobotDetectorConfig"  # names the fields in error messages
 REJECTIONS = (
     "above_horizon",
@@ -173,19 +172,19 @@ class RobotDetectorConfig:
     cut_range_std_fraction: float = 0.5  # relative range std added when ranged at the bottom
 
     def __post_init__(self) -> None:
-        _check_hsv_range("green_hsv", self.green_hsv)
-        _check_hsv_range("white_hsv", self.white_hsv)
+        check_hsv_range(_OWNER, "green_hsv", self.green_hsv)
+        check_hsv_range(_OWNER, "white_hsv", self.white_hsv)
         if not (isinstance(self.pole_hsv, tuple) and self.pole_hsv):
             raise ValueError(f"{_OWNER}.pole_hsv must be a non-empty tuple of HSV ranges")
         for k, colour in enumerate(self.pole_hsv):
-            _check_hsv_range(f"pole_hsv[{k}]", colour)
+            check_hsv_range(_OWNER, f"pole_hsv[{k}]", colour)
         if not (isinstance(self.team_hsv, tuple) and len(self.team_hsv) == 2):
             raise ValueError(f"{_OWNER}.team_hsv must be a pair (team 0, team 1) of HSV ranges")
         for team, ranges in enumerate(self.team_hsv):
             if not (isinstance(ranges, tuple) and ranges):
                 raise ValueError(f"{_OWNER}.team_hsv[{team}] must be a non-empty tuple of ranges")
             for k, value in enumerate(ranges):
-                _check_hsv_range(f"team_hsv[{team}][{k}]", value)
+                check_hsv_range(_OWNER, f"team_hsv[{team}][{k}]", value)
         check_int(_OWNER, "column_step_px", self.column_step_px, 1)
         check_int(_OWNER, "median_columns", self.median_columns, 1)
         check_int(_OWNER, "gap_columns", self.gap_columns, 1)
@@ -264,22 +263,6 @@ class RobotDetectorConfig:
                 f"{_OWNER}.waistband_bottom_m must lie below team_search_heights_m[1], got "
                 f"{self.waistband_bottom_m} >= {self.team_search_heights_m[1]}"
             )
-
-
-def _check_hsv_range(name: str, value: HsvRange) -> None:
-    """Raise ``ValueError`` unless ``value`` is a valid :data:`HsvRange` (field ``name``)."""
-    ok = (
-        isinstance(value, tuple)
-        and len(value) == 2
-        and all(isinstance(b, tuple) and len(b) == 3 for b in value)
-        and all(isinstance(x, int) and not isinstance(x, bool) for b in value for x in b)
-        and all(0 <= lo <= hi <= top for lo, hi, top in zip(*value, _HSV_MAX, strict=True))
-    )
-    if not ok:
-        raise ValueError(
-            f"{_OWNER}.{name} must be ((h, s, v), (h, s, v)) ints with "
-            f"0 <= low <= high <= {_HSV_MAX}, got {value!r}"
-        )
 
 
 @dataclass(frozen=True)
