@@ -14,8 +14,10 @@ Provider choice, by representation (:data:`PROVIDERS`; the defaults of
                                               │
     odometry_delta ───────────────────────────┼──► self_pose [ekf_slam | oracle] ──┐
                   └──► odometry_pose            └──► pole_last_seen [history]     │
-    image_detections ──► robot_sightings [cnn | oracle] ──────────────────────────┴──►
-        robot_tracks [tracker]        sonar ──► sonar_observations [filter]
+    image, sonar_observations ──► robot_sightings [vision] ──┐                     │
+    image ──► robot_sightings [vision_only]                  ├──► robot_tracks [tracker]
+    image_detections ──► robot_sightings [cnn | oracle] ─────┘
+    sonar ──► sonar_observations [filter]
 
 A representation an emulator delivers (``emulated``: the geometric camera mode's pole
 sightings) is read from :attr:`perception.types.SensorFrame.emulated` instead of a provider.
@@ -44,7 +46,13 @@ from perception.providers.poles import (
     ColourPoleSightings,
     PoleSightingHistory,
 )
-from perception.providers.robots import CnnRobotSightings, FilteredSonar, TrackedRobots
+from perception.providers.robots import (
+    CnnRobotSightings,
+    FilteredSonar,
+    TrackedRobots,
+    VisionOnlyRobotSightings,
+    VisionRobotSightings,
+)
 from perception.providers.slam import EkfSlamProvider
 from perception.representations import (
     FRAME_INPUTS,
@@ -68,6 +76,7 @@ from perception.validation import check_choice, check_in_interval
 from perception.vision.cnn_detector import CnnDetectorConfig
 from perception.vision.cnn_robots import CnnRobotConfig
 from perception.vision.colour_filter import ColourFilterConfig
+from perception.vision.robots import RobotDetectorConfig
 
 ProviderFactory = Callable[["PipelineConfig", PerceptionContext], Provider]
 
@@ -86,6 +95,8 @@ PROVIDERS: Mapping[str, Mapping[str, ProviderFactory]] = {
         "oracle": lambda c, ctx: OracleSelfPose(c.oracle),
     },
     ROBOT_SIGHTINGS: {
+        "vision": lambda c, ctx: VisionRobotSightings(c.vision_robots, c.sonar_filter, ctx),
+        "vision_only": lambda c, ctx: VisionOnlyRobotSightings(c.vision_robots, ctx),
         "cnn": lambda c, ctx: CnnRobotSightings(c.cnn_robots),
         "oracle": lambda c, ctx: OracleRobotSightings(c.oracle, ctx),
     },
@@ -124,6 +135,7 @@ class PipelineConfig:
     slam: EkfSlamConfig = field(default_factory=lambda: EkfSlamConfig(backend="gated"))
     robot_sightings: str = "cnn"  # one of PROVIDERS["robot_sightings"]
     cnn_robots: CnnRobotConfig = field(default_factory=CnnRobotConfig)
+    vision_robots: RobotDetectorConfig = field(default_factory=RobotDetectorConfig)
     sonar_filter: SonarFilterConfig = field(default_factory=SonarFilterConfig)
     robot_tracker: RobotTrackerConfig = field(default_factory=RobotTrackerConfig)
     oracle: OracleConfig = field(default_factory=OracleConfig)

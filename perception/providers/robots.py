@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, ClassVar
 
-from perception.providers.base import Provider
+from perception.providers.base import PerceptionContext, Provider
 from perception.representations import (
     IMAGE_DETECTIONS,
     ROBOT_SIGHTINGS,
@@ -15,9 +15,15 @@ from perception.representations import (
     Prior,
 )
 from perception.tracking.robot_tracker import RobotTracker, RobotTrackerConfig
-from perception.tracking.sonar_filter import SonarFilter, SonarFilterConfig, SonarObservation
+from perception.tracking.sonar_filter import (
+    SonarFilter,
+    SonarFilterConfig,
+    SonarObservation,
+    confirm_with_sonar,
+)
 from perception.types import RobotSighting, RobotTrack
 from perception.vision.cnn_robots import CnnRobotConfig, robot_sightings
+from perception.vision.robots import RobotDetector, RobotDetectorConfig
 
 
 class FilteredSonar(Provider):
@@ -34,6 +40,47 @@ class FilteredSonar(Provider):
 
     def update(self, inputs: Mapping[str, Any], time_s: float) -> tuple[SonarObservation, ...]:
         return self.filter.update(time_s, inputs["sonar"])
+
+
+class VisionOnlyRobotSightings(Provider):
+    """Robot sightings from field-edge indents (seed 004 §6.2, :class:`RobotDetector`) without
+    the sonar check: sightings without a team colour are kept (``team=None``). An ablation of
+    :class:`VisionRobotSightings`, and the front end of a robot without sonar."""
+
+    provides = ROBOT_SIGHTINGS
+    requires: ClassVar[tuple[str, ...]] = ("image", "camera_state")
+
+    def __init__(self, config: RobotDetectorConfig, context: PerceptionContext) -> None:
+        self.detector = RobotDetector(config, context.camera)
+
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> tuple[RobotSighting, ...]:
+        return tuple(self.detector.detect(inputs["image"], inputs["camera_state"]))
+
+
+class VisionRobotSightings(VisionOnlyRobotSightings):
+    """Seed 004's robot detection complete (§6.2, Algorithm 2): field-edge indents with their
+    team colour, then the sonar check against this frame's filtered sonar ranges
+    (:func:`confirm_with_sonar`): a sighting at a sonar range takes it, and one with neither a
+    team colour nor a sonar confirmation is dropped."""
+
+    requires = ("image", "camera_state", SONAR_OBSERVATIONS, "sonar_model")
+
+    def __init__(
+        self,
+        config: RobotDetectorConfig,
+        sonar: SonarFilterConfig,
+        context: PerceptionContext,
+    ) -> None:
+        super().__init__(config, context)
+        self.sonar = sonar
+
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> tuple[RobotSighting, ...]:
+        return confirm_with_sonar(
+            super().update(inputs, time_s),
+            inputs[SONAR_OBSERVATIONS],
+            inputs["sonar_model"],
+            self.sonar,
+        )
 
 
 class CnnRobotSightings(Provider):

@@ -125,8 +125,9 @@ def head_action(config: RobotConfig, yaw_rad: float, pitch_rad: float) -> FloatA
     return np.array([yaw_rad / config.head_yaw_limit_rad, (pitch_rad - pitch_mid) / pitch_half])
 
 
-def _body_parts(team: int) -> list[VisualPart]:
-    """Legs, waistband, jersey and arms of a standing Nao (about 0.57 m tall with the head)."""
+def _body_parts(team: int, team_colours: bool) -> list[VisualPart]:
+    """Legs, waistband, jersey and arms of a standing Nao (about 0.57 m tall with the head);
+    waistband and jersey in ``team``'s colours, or grey like the rest without ``team_colours``."""
     parts = [
         VisualPart(shape="box", size=(0.045, 0.035, 0.13), position=(0.0, y, 0.13), rgba=NAO_GREY)
         for y in (-0.05, 0.05)
@@ -136,7 +137,7 @@ def _body_parts(team: int) -> list[VisualPart]:
             shape="box",
             size=(0.055, 0.085, 0.02),
             position=(0.0, 0.0, 0.28),
-            rgba=TEAM_WAISTBAND_RGBA[team],
+            rgba=TEAM_WAISTBAND_RGBA[team] if team_colours else NAO_GREY,
         )
     )
     parts.append(
@@ -144,7 +145,7 @@ def _body_parts(team: int) -> list[VisualPart]:
             shape="box",
             size=(0.05, 0.08, 0.07),
             position=(0.0, 0.0, 0.37),
-            rgba=TEAM_JERSEY_RGBA[team],
+            rgba=TEAM_JERSEY_RGBA[team] if team_colours else NAO_GREY,
         )
     )
     parts += [
@@ -155,11 +156,25 @@ def _body_parts(team: int) -> list[VisualPart]:
 
 
 class NaoRobot:
-    """One robot in a :class:`BulletWorld`: pose, walk state, head joints and camera geometry."""
+    """One robot in a :class:`BulletWorld`: pose, walk state, head joints and camera geometry.
 
-    def __init__(self, world: BulletWorld, name: str, *, team: int, config: RobotConfig) -> None:
+    ``team`` (0 or 1) is the robot's team; it wears the team's jersey and waistband unless
+    ``team_colours`` is False (seed 004's penalty test: a goalie without a waistband).
+    """
+
+    def __init__(
+        self,
+        world: BulletWorld,
+        name: str,
+        *,
+        team: int,
+        config: RobotConfig,
+        team_colours: bool = True,
+    ) -> None:
         if team not in (0, 1):
             raise ValueError(f"team must be 0 or 1, got {team!r}")
+        if not isinstance(team_colours, bool):
+            raise TypeError(f"team_colours must be a bool, got {type(team_colours).__name__}")
         self.world = world
         self.name = name
         self.team = team
@@ -169,7 +184,7 @@ class NaoRobot:
         )
         world.add_articulated(
             name,
-            _body_parts(team),
+            _body_parts(team, team_colours),
             [
                 LinkSpec(
                     parent=0, offset=(0.0, 0.0, config.head_yaw_joint_height_m), axis=(0, 0, 1)

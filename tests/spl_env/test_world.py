@@ -141,6 +141,12 @@ def test_bad_configs_rejected() -> None:
         SceneConfig(board_height_m=-1.0)
     with pytest.raises(ValueError, match="time_step_s"):
         BulletWorld(time_step_s=0.0)
+    world = BulletWorld(time_step_s=0.01)
+    with pytest.raises(ValueError, match="team must be 0 or 1"):
+        NaoRobot(world, "r", team=2, config=RobotConfig())
+    with pytest.raises(TypeError, match="team_colours must be a bool"):
+        NaoRobot(world, "r", team=0, config=RobotConfig(), team_colours=1)  # type: ignore[arg-type]
+    world.close()
 
 
 def test_camera_pose_matches_pybullet_head_link_while_swaying(scene) -> None:
