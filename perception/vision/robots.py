@@ -711,12 +711,7 @@ class RobotDetector:
         of ``min_waistband_px`` pixels counts (see :meth:`_cluster`).
         """
         cfg, cam = self.config, self.camera
-        if cut:
-            rows = (0, bottom)
-        else:
-            high = self._row_at_height(state, *at_base, cfg.team_search_heights_m[1])
-            low = self._row_at_height(state, *at_base, cfg.team_search_heights_m[0])
-            rows = (max(math.floor(high), 0), min(max(math.ceil(low), 0), bottom))
+        rows = self._team_rows(state, at_base, bottom, cut)
         size = max(cols[1] - cols[0] + 1.0, cam.fx * cfg.robot_width_m / depth)
         window = self._window(cols, cfg.team_search_margin * size + 2.0)
         inner = (math.floor(cols[0] - 0.25 * size), math.ceil(cols[1] + 0.25 * size))
@@ -749,12 +744,7 @@ class RobotDetector:
         of ``min_waistband_px`` pixels and a quarter to one and a half robot widths wide.
         """
         cfg, cam = self.config, self.camera
-        if cut:
-            r0, r1 = 0, bottom
-        else:
-            high = self._row_at_height(state, *at_base, cfg.team_search_heights_m[1])
-            low = self._row_at_height(state, *at_base, cfg.team_search_heights_m[0])
-            r0, r1 = max(math.floor(high), 0), min(max(math.ceil(low), 0), bottom)
+        r0, r1 = self._team_rows(state, at_base, bottom, cut)
         c0, c1 = cols
         if r1 < r0:
             return [cols]
@@ -779,6 +769,19 @@ class RobotDetector:
         cuts = [c0 + (merged[i][1] + merged[i + 1][0] + 1) // 2 for i in range(len(merged) - 1)]
         bounds = [c0, *cuts, c1 + 1]
         return [(bounds[i], bounds[i + 1] - 1) for i in range(len(bounds) - 1)]
+
+    def _team_rows(
+        self, state: CameraState, at_base: tuple[float, float], bottom: int, cut: bool
+    ) -> tuple[int, int]:
+        """The rows (inclusive) a team colour is searched in: between the heights
+        ``team_search_heights_m`` above the base at ``at_base`` (range, bearing), or every row
+        down to the box's ``bottom`` when its base is ``cut``."""
+        if cut:
+            return 0, bottom
+        heights = self.config.team_search_heights_m
+        high = self._row_at_height(state, *at_base, heights[1])
+        low = self._row_at_height(state, *at_base, heights[0])
+        return max(math.floor(high), 0), min(max(math.ceil(low), 0), bottom)
 
     def _pole_colour(
         self,
