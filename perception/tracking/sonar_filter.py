@@ -86,16 +86,20 @@ class SonarFilterConfig:
 
     - ``match_abs_m`` (m, >= 0) and ``match_rel`` (>= 0): a sighting whose predicted echo
       distance is ``d`` matches a filtered range ``s`` when
-      ``|s - d| <= match_abs_m + match_rel * d``. Defaults 0.10 m + 20 %: vision's range is
-      the weak part (seed 004: first sightings of a goalie 2 m away were 42-58 cm off, mostly
-      short), and its error grows with range (a pixel of ground-contact row is worth about
-      ``r^2 / (h f)`` metres), hence the relative term; the absolute floor covers close range,
-      where a cropped foot or the target's body depth (below) dominate. At 1 m that is
-      +-0.30 m, at 2 m +-0.50 m; the nearest filtered range in the sighting's cones wins.
+      ``|s - d| <= match_abs_m + match_rel * d``. Defaults 0.10 m + 10 %: vision's range is
+      the weak part, and its error grows with range (a pixel of ground-contact row is worth
+      about ``r^2 / (h f)`` metres), hence the relative term; the absolute floor covers close
+      range, where a cropped foot or the target's body depth (below) dominate. At 1 m that is
+      +-0.20 m, at 2 m +-0.30 m: about twice the field-edge detector's range error std
+      (3.5-6.8 % within 3 m on the tuning seeds 0-9 of ``benchmarks/robot_detection.py``).
+      Seed 004's vision was worse (first sightings of a goalie 2 m away 42-58 cm off); the
+      first default, 0.10 m + 20 %, let the echo of another robot confirm 3 % of the
+      sightings there (confirmed ranges up to 26 % short).
     - ``target_depth_m`` (m, >= 0): a sonar echo comes from the near surface of a robot, a
       sighting locates its centre; the echo is expected this much nearer than the centre, and a
-      confirmed range is the echo plus this. Default 0.05 m: the half depth of a Nao's torso at
-      chest height (the simulated Nao's jersey and waistband boxes are 0.10-0.11 m deep).
+      confirmed range is the echo plus this. Default 0.10 m: on the tuning seeds 0-3 the
+      nearest echo of a simulated Nao came 0.107 m before its centre (10-90 %: 0.08-0.135 m;
+      its torso is 0.10-0.11 m deep, but its arms stick out when it stands turned).
     - ``min_range_std_m`` (m, > 0): floor of a confirmed range's standard deviation, which is
       otherwise the sonar's ``range_noise_std_m``; keeps the covariance positive definite for a
       noise-free sonar model. Default 1 mm.
@@ -110,8 +114,8 @@ class SonarFilterConfig:
     linkage: str = "centroid"
     min_cluster_size: int = 3
     match_abs_m: float = 0.10
-    match_rel: float = 0.20
-    target_depth_m: float = 0.05
+    match_rel: float = 0.10
+    target_depth_m: float = 0.10
     min_range_std_m: float = 1e-3
 
     def __post_init__(self) -> None:
@@ -318,14 +322,17 @@ def confirm_with_sonar(
     distance by 4.3 cm and widens the bearing by 1.5°, as large as the cluster cut-off). A
     sighting is in a sector's cone when its bearing from the transducers lies within half the
     sector's width of its centre (sectors overlap; every sector whose cone holds it counts). Its
-    predicted echo distance is its distance from the transducers less ``target_depth_m``; the
-    in-cone observation nearest to that, if within :meth:`SonarFilterConfig.match_tolerance_m`,
-    confirms it. The confirmed sighting keeps its bearing and takes the range, from the robot
-    origin along that bearing, of the point ``echo + target_depth_m`` from the transducers
-    (:func:`origin_range`); its range variance becomes the sonar's (``range_noise_std_m``,
-    floored at ``min_range_std_m``, through that map's slope, within 1.5 % of 1 beyond 0.3 m),
-    the range-bearing covariance 0 (the range is now the sonar's, independent of vision's
-    bearing), and ``sonar_confirmed`` True. Team, box, score and bearing variance are kept.
+    predicted echo distance is its distance from the transducers less ``target_depth_m``; an
+    in-cone observation within :meth:`SonarFilterConfig.match_tolerance_m` of that matches it.
+    Each observation confirms at most one sighting and each sighting takes at most one
+    observation: matches are taken nearest first (greedy on the range difference), so one
+    echo cannot lend its range to every sighting in its cone. The confirmed sighting keeps its
+    bearing and takes the range, from the robot origin along that bearing, of the point
+    ``echo + target_depth_m`` from the transducers (:func:`origin_range`); its range variance
+    becomes the sonar's (``range_noise_std_m``, floored at ``min_range_std_m``, through that
+    map's slope, within 1.5 % of 1 beyond 0.3 m), the range-bearing covariance 0 (the range
+    is now the sonar's, independent of vision's bearing), and ``sonar_confirmed`` True. Team,
+    box, score and bearing variance are kept.
 
     Then a sighting with no team (``team is None``) that is not sonar confirmed (now, or
     already on input) is dropped; every other sighting passes, unchanged when unconfirmed.
@@ -339,10 +346,6 @@ def confirm_with_sonar(
             raise InvalidTypeError(
                 f"observations[{k}] must be a SonarObservation, got {type(obs).__name__}"
             )
-    centres = model.sector_centres_rad()
-    half_widths = 0.5 * model.sector_widths_rad()
-    sonar_std = max(model.range_noise_std_m, config.min_range_std_m)
-    kept: list[RobotSighting] = []
     for k, sighting in enumerate(sightings):
         if not isinstance(sighting, RobotSighting):
             raise InvalidTypeError(
@@ -350,7 +353,25 @@ def confirm_with_sonar(
             )
         check_positive(f"sightings[{k}]", "range_m", sighting.range_m)
         check_finite(f"sightings[{k}]", "bearing_rad", sighting.bearing_rad)
-        confirmed = _confirm(sighting, observations, model, config, centres, half_widths, sonar_std)
+    pairs = sorted(
+        (abs(observations[j].range_m - predicted), k, j)
+        for k, sighting in enumerate(sightings)
+        for predicted, j in _matches(sighting, observations, model, config)
+    )
+    taken: dict[int, int] = {}  # sighting -> observation
+    used: set[int] = set()
+    for _, k, j in pairs:
+        if k not in taken and j not in used:
+            taken[k] = j
+            used.add(j)
+    sonar_std = max(model.range_noise_std_m, config.min_range_std_m)
+    kept: list[RobotSighting] = []
+    for k, sighting in enumerate(sightings):
+        confirmed = (
+            _confirmed(sighting, observations[taken[k]], model, config, sonar_std)
+            if k in taken
+            else None
+        )
         if confirmed is not None:
             kept.append(confirmed)
         elif sighting.team is not None or sighting.sonar_confirmed:
@@ -358,31 +379,37 @@ def confirm_with_sonar(
     return tuple(kept)
 
 
-def _confirm(
+def _matches(
     sighting: RobotSighting,
     observations: Sequence[SonarObservation],
     model: SonarModel,
     config: SonarFilterConfig,
-    centres: FloatArray,
-    half_widths: FloatArray,
-    sonar_std: float,
-) -> RobotSighting | None:
-    """``sighting`` with the matching sonar range, or None when no observation matches."""
+) -> list[tuple[float, int]]:
+    """``(predicted echo distance, index)`` of each observation in ``observations`` that matches
+    ``sighting``: in one of its sector's cones and within the match tolerance."""
     distance, bearing = sonar_polar(sighting.range_m, sighting.bearing_rad, model.mount_x_m)
-    off_axis = np.abs((bearing - centres + math.pi) % (2.0 * math.pi) - math.pi)
-    in_cone = off_axis <= half_widths
+    off_axis = np.abs((bearing - model.sector_centres_rad() + math.pi) % (2.0 * math.pi) - math.pi)
+    in_cone = off_axis <= 0.5 * model.sector_widths_rad()
     predicted = distance - config.target_depth_m
     tolerance = config.match_tolerance_m(predicted)
-    candidates = [
-        obs
-        for obs in observations
+    return [
+        (predicted, j)
+        for j, obs in enumerate(observations)
         if in_cone[obs.sector] and abs(obs.range_m - predicted) <= tolerance
     ]
-    if not candidates:
-        return None
-    best = min(candidates, key=lambda obs: abs(obs.range_m - predicted))  # first of equals
+
+
+def _confirmed(
+    sighting: RobotSighting,
+    observation: SonarObservation,
+    model: SonarModel,
+    config: SonarFilterConfig,
+    sonar_std: float,
+) -> RobotSighting | None:
+    """``sighting`` with ``observation``'s range and the sonar's range noise, or None when the
+    echo's circle does not cross the sighting's bearing."""
     crossing = origin_range(
-        best.range_m + config.target_depth_m,
+        observation.range_m + config.target_depth_m,
         sighting.bearing_rad,
         model.mount_x_m,
         sighting.range_m,

@@ -306,8 +306,8 @@ def test_config_rejects_bad_fields(kwargs, error):
 def test_config_defaults():
     config = SonarFilterConfig()
     assert config.cluster_cutoff_m == 0.05 and config.linkage in LINKAGES
-    assert config.match_tolerance_m(1.0) == pytest.approx(0.30)
-    assert config.match_tolerance_m(2.0) == pytest.approx(0.50)
+    assert config.match_tolerance_m(1.0) == pytest.approx(0.20)
+    assert config.match_tolerance_m(2.0) == pytest.approx(0.30)
     assert SonarFilterConfig(match_abs_m=0.0, match_rel=0.0).match_tolerance_m(1.0) == 0.0
 
 
@@ -362,11 +362,16 @@ def test_origin_range_outside_the_circle():
 
 
 # ----- Algorithm 2 ---------------------------------------------------------------------------
+# The worked cases below use a 5 cm body depth and a 0.10 m + 20 % match window (round numbers,
+# not the defaults).
+WORKED = SonarFilterConfig(target_depth_m=0.05, match_abs_m=0.10, match_rel=0.20)
+
+
 def test_in_cone_and_close_range_takes_the_sonar_range_and_is_confirmed():
     # Straight ahead at 1.00 m: 0.95 m from the transducers, its near surface 0.90 m.
     sighting = _sighting(1.00, 0.0, team=None, box=np.array([1.0, 2.0, 3.0, 4.0]), score=0.7)
     observations = (SonarObservation(sector=MIDDLE, range_m=0.92, count=4),)
-    (out,) = confirm_with_sonar([sighting], observations, MODEL)
+    (out,) = confirm_with_sonar([sighting], observations, MODEL, WORKED)
     assert out.sonar_confirmed
     assert out.range_m == pytest.approx(0.92 + 0.05 + 0.05)  # echo + body depth + mount
     assert out.bearing_rad == sighting.bearing_rad
@@ -378,7 +383,7 @@ def test_in_cone_and_close_range_takes_the_sonar_range_and_is_confirmed():
 def test_a_confirmed_range_off_axis_accounts_for_the_mount():
     sighting = _sighting(1.0, 40.0, team=1)
     observations = (SonarObservation(sector=LEFT, range_m=0.95, count=3),)
-    (out,) = confirm_with_sonar([sighting], observations, MODEL)
+    (out,) = confirm_with_sonar([sighting], observations, MODEL, WORKED)
     assert out.sonar_confirmed and out.team == 1
     # The new point on the sighting's bearing lies echo + depth from the transducers.
     x = out.range_m * math.cos(out.bearing_rad) - MODEL.mount_x_m
@@ -392,7 +397,7 @@ def test_a_confirmed_range_off_axis_accounts_for_the_mount():
 def test_the_match_uses_the_distance_from_the_transducers():
     # At 1 m and 40° the transducers are 0.9622 m away (0.9122 m to the near surface); from the
     # robot origin it would look like 0.95 m.
-    tight = SonarFilterConfig(match_abs_m=0.005, match_rel=0.0)
+    tight = SonarFilterConfig(match_abs_m=0.005, match_rel=0.0, target_depth_m=0.05)
     sighting = _sighting(1.0, 40.0)
     at = (SonarObservation(sector=LEFT, range_m=0.9122, count=3),)
     naive = (SonarObservation(sector=LEFT, range_m=0.95, count=3),)
@@ -404,10 +409,12 @@ def test_the_cone_is_seen_from_the_transducers():
     # 53° from the origin at 0.5 m is 57.9° from the transducers: beyond the left cone's 55°.
     echo = sonar_polar(0.5, math.radians(53.0), MODEL.mount_x_m)[0] - 0.05
     observations = (SonarObservation(sector=LEFT, range_m=echo, count=3),)
-    assert confirm_with_sonar([_sighting(0.5, 53.0)], observations, MODEL) == ()
+    assert confirm_with_sonar([_sighting(0.5, 53.0)], observations, MODEL, WORKED) == ()
     echo = sonar_polar(0.5, math.radians(50.0), MODEL.mount_x_m)[0] - 0.05  # 54.7°: inside
     observations = (SonarObservation(sector=LEFT, range_m=echo, count=3),)
-    assert confirm_with_sonar([_sighting(0.5, 50.0)], observations, MODEL)[0].sonar_confirmed
+    assert confirm_with_sonar([_sighting(0.5, 50.0)], observations, MODEL, WORKED)[
+        0
+    ].sonar_confirmed
 
 
 @pytest.mark.parametrize(
@@ -423,7 +430,7 @@ def test_the_cone_is_seen_from_the_transducers():
 def test_out_of_cone_or_far_range_is_unchanged_and_unconfirmed(bearing_deg, observation):
     with_team = _sighting(1.0, bearing_deg, team=0)
     without = _sighting(1.0, bearing_deg, team=None)
-    assert confirm_with_sonar([with_team, without], [observation], MODEL) == (with_team,)
+    assert confirm_with_sonar([with_team, without], [observation], MODEL, WORKED) == (with_team,)
 
 
 def test_no_team_and_unconfirmed_is_dropped_team_and_unconfirmed_is_kept():
@@ -436,12 +443,16 @@ def test_no_team_and_unconfirmed_is_dropped_team_and_unconfirmed_is_kept():
         _sighting(2.0, 60.0, team=None, sonar_confirmed=True),  # confirmed before: kept
     ]
     observations = (SonarObservation(sector=MIDDLE, range_m=0.9, count=5),)
-    out = confirm_with_sonar(sightings, observations, MODEL)
+    out = confirm_with_sonar(sightings, observations, MODEL, WORKED)
     assert len(out) == 4
     assert out[0].sonar_confirmed and out[0].range_m == pytest.approx(1.0)
     assert out[1:] == (sightings[2], sightings[4], sightings[5])
-    assert confirm_with_sonar([], observations, MODEL) == ()
-    assert confirm_with_sonar(sightings, (), MODEL) == (sightings[2], sightings[4], sightings[5])
+    assert confirm_with_sonar([], observations, MODEL, WORKED) == ()
+    assert confirm_with_sonar(sightings, (), MODEL, WORKED) == (
+        sightings[2],
+        sightings[4],
+        sightings[5],
+    )
 
 
 def test_the_nearest_matching_range_wins_across_overlapping_cones():
@@ -453,10 +464,28 @@ def test_the_nearest_matching_range_wins_across_overlapping_cones():
         SonarObservation(sector=LEFT, range_m=predicted + 0.02, count=3),
         SonarObservation(sector=RIGHT, range_m=predicted, count=3),  # right cone ends at 5°
     )
-    (out,) = confirm_with_sonar([sighting], observations, MODEL)
+    (out,) = confirm_with_sonar([sighting], observations, MODEL, WORKED)
     x = out.range_m * math.cos(out.bearing_rad) - MODEL.mount_x_m
     y = out.range_m * math.sin(out.bearing_rad)
     assert math.hypot(x, y) == pytest.approx(predicted + 0.02 + 0.05)
+
+
+def test_one_echo_confirms_one_sighting_the_nearest_in_range():
+    # Two teamless sightings straight ahead at 1.0 and 1.2 m (predicted echoes 0.90 and 1.10 m)
+    # and one echo at 0.95 m, within the window of both: only the first takes it.
+    sightings = [_sighting(1.2, 0.0, team=None), _sighting(1.0, 0.0, team=None)]
+    one = (SonarObservation(sector=MIDDLE, range_m=0.95, count=3),)
+    (out,) = confirm_with_sonar(sightings, one, MODEL, WORKED)
+    assert out.sonar_confirmed and out.range_m == pytest.approx(0.95 + 0.05 + 0.05)
+    # a second echo nearer the other sighting confirms it too, each with its own range
+    two = (*one, SonarObservation(sector=MIDDLE, range_m=1.12, count=3))
+    far, near = confirm_with_sonar(sightings, two, MODEL, WORKED)
+    assert far.range_m == pytest.approx(1.12 + 0.1) and near.range_m == pytest.approx(1.05)
+    # a sighting with a team that loses the echo is kept unconfirmed
+    teams = [_sighting(1.2, 0.0, team=0), _sighting(1.0, 0.0, team=1)]
+    kept = confirm_with_sonar(teams, one, MODEL, WORKED)
+    assert [s.sonar_confirmed for s in kept] == [False, True]
+    assert kept[0] == teams[0]
 
 
 def test_the_tolerance_grows_with_range():
@@ -472,7 +501,7 @@ def test_the_tolerance_grows_with_range():
 def test_a_noise_free_sonar_keeps_a_positive_definite_covariance():
     model = SonarModel(range_noise_std_m=0.0)
     observations = (SonarObservation(sector=MIDDLE, range_m=0.9, count=3),)
-    (out,) = confirm_with_sonar([_sighting(1.0, 0.0)], observations, model)
+    (out,) = confirm_with_sonar([_sighting(1.0, 0.0)], observations, model, WORKED)
     assert out.cov[0, 0] == pytest.approx(1e-3**2)
     assert np.linalg.eigvalsh(out.cov).min() > 0
 
@@ -483,7 +512,7 @@ def test_filter_and_confirmation_together():
     for k in range(5):  # a robot 1.2 m ahead: its chest 1.10 m from the transducers
         f.update(0.1 * k, _reading(middle=1.10 + 0.01 * rng.standard_normal(1)))
     vision = [_sighting(1.0, 2.0, team=None), _sighting(1.3, 45.0, team=None)]
-    (out,) = confirm_with_sonar(vision, f.observations, MODEL)
+    (out,) = confirm_with_sonar(vision, f.observations, MODEL, WORKED)
     assert out.sonar_confirmed and out.range_m == pytest.approx(1.2, abs=0.02)
 
 

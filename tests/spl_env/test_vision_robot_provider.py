@@ -27,6 +27,7 @@ OURS = np.array([-1.0, 0.5, 0.0])
 RANGE_M = 1.5  # the grey robot's centre straight ahead
 HEAD = np.array([0.0, 0.3])  # yaw, pitch (rad): looking a little down, the feet in view
 SONAR_SWEEPS = 5  # the filter's window
+FRONT_DEPTH_M = 0.05  # the jersey box's half depth (spl_env.robots.nao)
 
 
 @pytest.fixture(scope="module")
@@ -63,7 +64,9 @@ def test_sonar_sees_the_grey_robot_in_the_middle_sector(scene: Any) -> None:
     middle = [o for o in inputs[SONAR_OBSERVATIONS] if o.sector == 1]
     assert middle, "no filtered sonar range ahead"
     # the echo comes from the robot's front surface, a few cm nearer than its centre
-    assert min(abs(o.range_m - (RANGE_M - 0.05 - 0.05)) for o in middle) < 0.04
+    # from the transducers (mount_x_m ahead of our centre) to the grey robot's jersey front
+    echo = RANGE_M - FRONT_DEPTH_M - inputs["sonar_model"].mount_x_m
+    assert min(abs(o.range_m - echo) for o in middle) < 0.02
 
 
 def test_vision_only_keeps_the_grey_robot_without_a_team(scene: Any) -> None:
@@ -81,8 +84,10 @@ def test_vision_takes_the_sonar_range_of_a_confirmed_sighting(scene: Any) -> Non
     provider = VisionRobotSightings(cfg.vision_robots, cfg.sonar_filter, u.perception_context)
     (sighting,) = provider.update(inputs, 0.0)
     assert sighting.sonar_confirmed and sighting.team is None
-    # the sonar's 1 cm noise averaged over the window, and the target-depth model's few cm
-    assert abs(sighting.range_m - RANGE_M) < 0.03
+    # The echo comes from the jersey's front, FRONT_DEPTH_M before the centre of a robot facing
+    # us; the provider adds its target depth (a mean over how robots stand) to the echo.
+    expected = RANGE_M - FRONT_DEPTH_M + cfg.sonar_filter.target_depth_m
+    assert abs(sighting.range_m - expected) < 0.02  # the sonar's 1 cm noise, window-averaged
     sonar_std = u.rig.sonar.model.range_noise_std_m
     assert np.sqrt(sighting.cov[0, 0]) == pytest.approx(sonar_std, rel=0.05)
 
