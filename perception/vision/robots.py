@@ -595,7 +595,8 @@ class RobotDetector:
             if len(cols) and cols[-1] - cols[0] + 1 > line_px:
                 break
             end -= 1
-        if distance[end] - distance[bottom] >= cfg.min_line_m:
+        near = distance[bottom]  # inf for a bottom row above the horizon: no ground, no line
+        if math.isfinite(near) and distance[end] - near >= cfg.min_line_m:
             bottom = end
         while left < right and green[top : bottom + 1, left].mean() >= fraction:
             left += 1
