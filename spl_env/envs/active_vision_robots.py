@@ -28,12 +28,17 @@ class ActiveVisionRobotsEnv(SplEnv):
     Everything of ``SPL/ActiveVision-v0`` (:class:`spl_env.envs.active_vision.ActiveVisionEnv`:
     body walk, action, pole and self-pose observation keys, localisation reward, camera modes,
     configuration), plus the other robots as perception tracks them (seed 004 ch. 6):
-    ``robot_frontend="cnn"`` (the packaged CNN's ``robot`` detections, ground point of the box
-    bottom; the same CNN pass as the poles) or ``"oracle"`` (truth plus noise, for ablations);
-    the sightings move to the field with the SLAM pose (its covariance in the noise) and feed a
-    constant-velocity multi-robot Kalman tracker (chi-square gate, global nearest neighbour,
-    confirmed after 3 hits, dropped 2 s unseen). The geometric camera mode emulates the CNN's
-    robot sightings (in view, unhidden, the measured detection chance and noise).
+    ``robot_frontend="vision"`` (the default: seed 004 §6.2's indents in the field's edge, the
+    team from jersey and waistband colours, then Algorithm 2's sonar check: a sighting at a
+    filtered sonar range takes it, one with neither a team nor a sonar return is dropped),
+    ``"vision_only"`` (without the sonar check), ``"cnn"`` (the packaged CNN's ``robot``
+    detections, ground point of the box bottom; the same CNN pass as the poles; no team) or
+    ``"oracle"`` (truth plus noise, for ablations); the sightings move to the field with the
+    SLAM pose (its covariance in the noise) and feed a constant-velocity multi-robot Kalman
+    tracker (chi-square gate, global nearest neighbour, confirmed after 3 hits, dropped 2 s
+    unseen). The geometric camera mode emulates the ``vision`` or ``cnn`` front end's robot
+    sightings (in view, unhidden, their detection chance, team and noise measured on rendered
+    frames; :mod:`spl_env.sensors.emulation.robots`).
 
     **Observation**: v0's keys plus, for up to K = 8 confirmed tracks (nearest first; rows past
     the last are zero):

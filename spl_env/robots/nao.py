@@ -178,6 +178,7 @@ class NaoRobot:
         self.world = world
         self.name = name
         self.team = team
+        self.team_colours = team_colours
         self.config = config
         head = VisualPart(
             shape="box", size=(0.05, 0.065, 0.06), position=(0.0, 0.0, 0.045), rgba=NAO_GREY

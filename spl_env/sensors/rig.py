@@ -24,7 +24,7 @@ from perception.types import CameraState, GroundTruth, SensorFrame
 from spl_env.robots.nao import NaoRobot
 from spl_env.sensors.camera import Camera, CameraConfig, EpisodeLighting, blur_length_px
 from spl_env.sensors.emulation.poles import GeometricCameraConfig
-from spl_env.sensors.emulation.robots import GeometricRobotConfig
+from spl_env.sensors.emulation.robots import CNN_ROBOTS, VISION_ROBOTS, GeometricRobotConfig
 from spl_env.sensors.laser import Laser, LaserConfig
 from spl_env.sensors.odometry import OdometryConfig, WalkOdometry
 from spl_env.sensors.sonar import Sonar, SonarConfig
@@ -44,7 +44,8 @@ class RigConfig:
     camera: CameraConfig = field(default_factory=CameraConfig)
     camera_mode: str = "rendered"
     geometric_camera: GeometricCameraConfig = field(default_factory=GeometricCameraConfig)
-    geometric_robots: GeometricRobotConfig = field(default_factory=GeometricRobotConfig)
+    geometric_robots_cnn: GeometricRobotConfig = CNN_ROBOTS  # robot_sightings="cnn"
+    geometric_robots_vision: GeometricRobotConfig = VISION_ROBOTS  # robot_sightings="vision"
     odometry: OdometryConfig = field(default_factory=OdometryConfig)
     sonar: SonarConfig | None = field(default_factory=SonarConfig)
     laser: LaserConfig | None = None

@@ -3,6 +3,7 @@ sightings and tracking in the env, against known geometry."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import gymnasium as gym
@@ -14,6 +15,11 @@ from perception.representations import ROBOT_SIGHTINGS, ROBOT_TRACKS, SELF_POSE,
 from perception.types import CameraModel, RobotTrack, SensorFrame, SlamEstimate
 from spl_env.observations.base import EncoderInput
 from spl_env.observations.robots import RobotTracksEncoder
+from spl_env.sensors.emulation.robots import (
+    VISION_ROBOTS,
+    GeometricRobotConfig,
+    GeometricRobotSightings,
+)
 from spl_env.tasks.robot_awareness import tracked_share
 from spl_env.world_state import WorldState
 
@@ -91,7 +97,7 @@ def test_robot_track_encoder_from_a_turned_pose() -> None:
 
 
 def test_geometric_robot_sightings_follow_view_and_occlusion() -> None:
-    env = gym.make("SPL/ActiveVision-v1", n_other_robots=3, **FAST)
+    env = gym.make("SPL/ActiveVision-v1", n_other_robots=3, robot_frontend="cnn", **FAST)
     env.reset(seed=0)
     core = env.unwrapped
     ours, a, b, c = core.robots
@@ -117,6 +123,43 @@ def test_geometric_robot_sightings_follow_view_and_occlusion() -> None:
     env.close()
 
 
+def test_geometric_vision_sightings_need_a_team_or_the_sonar() -> None:
+    env = gym.make("SPL/ActiveVision-v1", n_other_robots=2, robot_frontend="vision", **FAST)
+    env.reset(seed=0)
+    core = env.unwrapped
+    ours, near, far = core.robots
+    ours.place(np.array([0.0, 0.0, 0.0]))
+    near.place(np.array([1.5, 0.2, 0.0]))  # 1.5 m: inside the sonar's middle cone and range
+    far.place(np.array([3.0, -0.4, 0.0]))  # 3 m: beyond the sonar's 2.55 m
+    core.scene.place_ball(np.array([-3.0, -2.0]))
+    assert isinstance(core.rig.emulators[ROBOT_SIGHTINGS], GeometricRobotSightings)
+    sonar = core.config.sensors.sonar
+    sure = dataclasses.replace(
+        VISION_ROBOTS, recall=(1.0,) * 4, sonar_confirm_probability=1.0, team_probability=0.0
+    )
+    emulator = GeometricRobotSightings(sure, core.config.sensors.camera.model, core.robots, sonar)
+    seen = [
+        emulator.observe(core.world, ours, ours.camera_state(), np.random.default_rng(k), 0.0)
+        for k in range(100)
+    ]
+    assert all(len(s) == 1 and s[0].sonar_confirmed and s[0].team is None for s in seen)
+    ranges = np.array([s[0].range_m for s in seen])
+    true_range = math.hypot(1.5, 0.2)
+    assert np.std(ranges) == pytest.approx(sure.sonar_range_std_fraction * true_range, rel=0.3)
+    assert abs(np.mean(ranges) - true_range) < 0.01
+    assert seen[0][0].cov[0, 0] == pytest.approx(sonar.range_noise_std_m**2)
+    with_team = dataclasses.replace(sure, team_probability=1.0)  # the far one now stays
+    emulator = GeometricRobotSightings(
+        with_team, core.config.sensors.camera.model, core.robots, sonar
+    )
+    found = emulator.observe(core.world, ours, ours.camera_state(), np.random.default_rng(0), 0.0)
+    assert [s.team for s in found] == [near.team, far.team]
+    assert [s.sonar_confirmed for s in found] == [True, False]
+    with pytest.raises(ValueError, match="no sonar"):
+        GeometricRobotSightings(sure, core.config.sensors.camera.model, core.robots, None)
+    env.close()
+
+
 @pytest.mark.parametrize("camera_mode", ["geometric", "rendered"])
 def test_oracle_sightings_give_tracks_at_the_true_robots(camera_mode: str) -> None:
     env = gym.make(
@@ -138,3 +181,26 @@ def test_oracle_sightings_give_tracks_at_the_true_robots(camera_mode: str) -> No
     assert len(errors) > 20 and np.median(errors) < 0.15
     assert env.observation_space.contains(obs)
     env.close()
+
+
+def test_geometric_robot_config_bands_and_bad_values() -> None:
+    config = GeometricRobotConfig(
+        band_edges_m=(1.0, 2.0),
+        recall=(0.1, 0.2, 0.3),
+        range_std_fraction=(0.01,) * 3,
+        bearing_std_rad=(0.01,) * 3,
+    )
+    assert [config.band(r) for r in (0.5, 1.0, 1.5, 2.5)] == [0, 1, 1, 2]
+    with pytest.raises(ValueError, match="band_edges_m"):
+        GeometricRobotConfig(band_edges_m=(2.0, 1.0), recall=(1.0, 1.0, 1.0))
+    with pytest.raises(ValueError, match="recall must hold one value per band"):
+        GeometricRobotConfig(band_edges_m=(1.0,), recall=(0.9,))
+    two = {"band_edges_m": (1.0,), "range_std_fraction": (0.1, 0.1), "bearing_std_rad": (0.1, 0.1)}
+    with pytest.raises(ValueError, match=r"recall\[1\]"):
+        GeometricRobotConfig(recall=(0.9, 1.2), **two)
+    with pytest.raises(ValueError, match=r"bearing_std_rad\[0\]"):
+        GeometricRobotConfig(**{**two, "bearing_std_rad": (0.0, 0.1)}, recall=(0.9, 0.9))
+    with pytest.raises(ValueError, match="team_probability"):
+        GeometricRobotConfig(team_probability=-0.1)
+    with pytest.raises(TypeError, match="sonar_check"):
+        GeometricRobotConfig(sonar_check=1)  # type: ignore[arg-type]

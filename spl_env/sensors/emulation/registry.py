@@ -33,13 +33,22 @@ def _colour_pole_sightings(
 def _cnn_robot_sightings(
     scene: SplFieldScene, robots: list[NaoRobot], sensors: RigConfig, perception: PipelineConfig
 ) -> GeometricRobotSightings:
-    return GeometricRobotSightings(sensors.geometric_robots, sensors.camera.model, robots)
+    return GeometricRobotSightings(sensors.geometric_robots_cnn, sensors.camera.model, robots)
+
+
+def _vision_robot_sightings(
+    scene: SplFieldScene, robots: list[NaoRobot], sensors: RigConfig, perception: PipelineConfig
+) -> GeometricRobotSightings:
+    return GeometricRobotSightings(
+        sensors.geometric_robots_vision, sensors.camera.model, robots, sensors.sonar
+    )
 
 
 # (representation, the provider it emulates) -> how to build the emulator
 EMULATORS: Mapping[tuple[str, str], EmulatorFactory] = {
     (POLE_SIGHTINGS, "colour"): _colour_pole_sightings,
     (ROBOT_SIGHTINGS, "cnn"): _cnn_robot_sightings,
+    (ROBOT_SIGHTINGS, "vision"): _vision_robot_sightings,
 }
 
 
