@@ -897,11 +897,13 @@ class RobotDetector:
     def _row_at_height(
         self, state: CameraState, range_m: float, bearing: float, height_m: float
     ) -> float:
-        """Image row (camera coordinates) of the point ``height_m`` above the ground point."""
+        """Image row (camera coordinates) of the point ``height_m`` above the ground point, or
+        -1 (above the image) when that point lies behind the camera (a camera looking steeply
+        down at a near robot: the point is above its view)."""
         cam = self.camera
         offset = self._point(range_m, bearing, height_m) - state.position
         uv, front = project_points(offset @ self._rotation(state), cam.fx, cam.fy, cam.cx, cam.cy)
-        return float(uv[0, 1]) if front[0] else -math.inf
+        return float(uv[0, 1]) if front[0] else -1.0
 
     def _covariance(
         self,

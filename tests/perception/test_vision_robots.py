@@ -353,3 +353,15 @@ def test_config_rejects_wrong_types() -> None:
         RobotDetectorConfig(column_step_px=True)  # type: ignore[arg-type]
     with pytest.raises(InvalidTypeError):
         RobotDetectorConfig(pixel_std_px="1")  # type: ignore[arg-type]
+
+
+def test_a_near_pole_seen_steeply_from_above_is_still_a_pole(detector: RobotDetector) -> None:
+    # Pitched 0.6 rad down, the camera sees the carpet up to the image top; a landmark pole
+    # 0.5 m ahead cuts an indent whose band search height (1.2 m) lies behind the camera, so
+    # the search starts at the image top (the env once raised OverflowError on such a frame).
+    steep = CameraState(
+        position=np.array([0.06, 0.0, 0.50]), head_yaw=0.0, head_pitch=0.6, tilt=math.radians(1.2)
+    )
+    image = draw(solids=post(0.5, 0.0, ("pink", "pole_blue")), state=steep)
+    (candidate,) = detector.candidates(image, steep)
+    assert candidate.box[1] < 0 and candidate.rejected == "pole"
