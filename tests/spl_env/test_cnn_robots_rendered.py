@@ -57,7 +57,7 @@ def body_corners() -> np.ndarray:
     silhouette's extremes in any view are among them."""
     head_z = NAO.head_yaw_joint_height_m + NAO.head_pitch_joint_offset_m + 0.045
     head = (0.05, 0.065, 0.06), (0.0, 0.0, head_z)  # spl_env/robots/nao.py NaoRobot: the head
-    boxes = [(part.size, part.position) for part in _body_parts(0)] + [head]
+    boxes = [(part.size, part.position) for part in _body_parts(0, True)] + [head]
     signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
     return np.vstack([np.asarray(c) + signs * np.asarray(h) for h, c in boxes])
 
