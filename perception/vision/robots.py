@@ -508,10 +508,13 @@ class RobotDetector:
                 ends = grey_closing(ends, size=width, mode="nearest")
             distance = self._bottom_distance(columns, ends, state)
             near = np.minimum(distance[1:], distance[:-1])
-            jump = np.abs(np.diff(distance)) > np.maximum(
-                cfg.split_min_m, cfg.split_fraction * near
+            # a bottom above the horizon (inf) is a jump from any neighbour
+            finite = np.isfinite(distance)
+            step_m = np.where(
+                finite[1:] & finite[:-1], np.diff(np.where(finite, distance, 0.0)), np.inf
             )
-            cuts = np.flatnonzero(jump | ~np.isfinite(np.diff(distance)))
+            jump = np.abs(step_m) > np.maximum(cfg.split_min_m, cfg.split_fraction * near)
+            cuts = np.flatnonzero(jump)
             starts = np.concatenate([[0], cuts + 1])
             stops = np.concatenate([cuts, [len(ends) - 1]])
             pieces = [
