@@ -94,6 +94,32 @@ def test_gymnasium_make_vec(env_id: str, mode: str, info_level: str) -> None:
         envs.close()
 
 
+@pytest.mark.parametrize("mode", ["sync", "async"])
+def test_make_vec_runs_v1_for_200_steps(mode: str) -> None:
+    # The robots issue's check: 200 steps of two SPL/ActiveVision-v1 envs (geometric mode: the
+    # default vision + sonar robot front end emulated), 5-second episodes.
+    envs = gym.make_vec(
+        "SPL/ActiveVision-v1",
+        num_envs=N_ENVS,
+        vectorization_mode=mode,
+        camera_mode="geometric",
+        frontend="colour",
+        episode_s=5.0,
+    )
+    try:
+        envs.action_space.seed(0)
+        obs, _ = envs.reset(seed=[3, 4])
+        ended = 0
+        for _ in range(200):
+            obs, reward, terminated, truncated, _ = envs.step(envs.action_space.sample())
+            assert envs.observation_space.contains(obs) and np.all(np.isfinite(reward))
+            ended += int((terminated | truncated).sum())
+        # 50-step episodes and a reset step after each (next-step autoreset): ends at 50, 101, 152
+        assert ended == 3 * N_ENVS
+    finally:
+        envs.close()
+
+
 def make_fns(env_id: str) -> list[Callable[[], gym.Env]]:
     return [lambda: gym.make(env_id, **FAST) for _ in range(N_ENVS)]
 
