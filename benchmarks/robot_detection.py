@@ -93,12 +93,13 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from numpy.typing import NDArray
 
 import spl_env  # noqa: F401  (registers the envs)
 from perception.geometry import FloatArray, range_bearing, wrap_angle
 from perception.pipeline import PipelineConfig
 from perception.providers.base import PerceptionContext
-from perception.tracking.sonar_filter import SonarFilter, confirm_with_sonar, sonar_polar
+from perception.tracking.sonar_filter import SonarFilter, audible, confirm_with_sonar
 from perception.types import RobotSighting
 from perception.vision.cnn_robots import robot_sightings
 from perception.vision.robots import RobotDetector
@@ -251,50 +252,55 @@ def projected_box(
     return np.array([u.min(), v.min(), u.max(), v.max()]), front
 
 
-def frame_truth(env: Any, labels: np.ndarray) -> list[Truth]:
-    """The other robots of the current frame with their visibility."""
+def wholly_in_view(env: Any) -> NDArray[np.bool_]:
+    """(R,) whether each other robot's projected standing box (feet included) lies wholly
+    inside our camera image and at most ``MAX_OCCLUDED_FRACTION`` of it is covered by a nearer
+    robot's box: the geometric half of *in view* (module doc)."""
     u = env.unwrapped
     state = u.world_state
     model = u.config.sensors.camera.model
     eye, rotation = u.robots[0].camera_pose_world()
-    others = [u.robots[k] for k in state.others]
-    rb = range_bearing(state.robot_pose, state.robots[:, :2])
-    boxes = [projected_box(eye, rotation, r.pose, model) for r in others]
-    out = []
-    for k, robot in enumerate(others):
-        pixels = int(np.count_nonzero(labels == u.world.body(robot.name)))
-        box, front = boxes[k]
+    ranges = range_bearing(state.robot_pose, state.robots[:, :2])[:, 0]
+    boxes = [projected_box(eye, rotation, u.robots[k].pose, model) for k in state.others]
+    out = np.zeros(len(boxes), dtype=bool)
+    for k, (box, front) in enumerate(boxes):
         inside = front and box[0] >= 0 and box[2] <= model.width - 1 and box[3] <= model.height - 1
+        if not inside:
+            continue
         area = max((box[2] - box[0]) * (box[3] - box[1]), 1e-9)
         covered = 0.0
         for j, (other, other_front) in enumerate(boxes):
-            if j == k or not other_front or rb[j, 0] >= rb[k, 0]:
+            if j == k or not other_front or ranges[j] >= ranges[k]:
                 continue
             w = min(box[2], other[2]) - max(box[0], other[0])
             h = min(box[3], other[3]) - max(box[1], other[1])
             if w > 0 and h > 0:
                 covered = max(covered, w * h / area)
-        visible = pixels >= MIN_VISIBLE_PX
+        out[k] = covered <= MAX_OCCLUDED_FRACTION
+    return out
+
+
+def frame_truth(env: Any, labels: np.ndarray) -> list[Truth]:
+    """The other robots of the current frame with their visibility."""
+    u = env.unwrapped
+    state = u.world_state
+    others = [u.robots[k] for k in state.others]
+    rb = range_bearing(state.robot_pose, state.robots[:, :2])
+    geometric = wholly_in_view(env)
+    out = []
+    for k, robot in enumerate(others):
+        pixels = int(np.count_nonzero(labels == u.world.body(robot.name)))
         out.append(
             Truth(
                 range_m=float(rb[k, 0]),
                 bearing_rad=float(rb[k, 1]),
                 team=int(robot.team),
                 pixels=pixels,
-                in_view=bool(visible and inside and covered <= MAX_OCCLUDED_FRACTION),
+                in_view=bool(pixels >= MIN_VISIBLE_PX and geometric[k]),
                 audible=audible(u.sensor_frame.sonar_model, float(rb[k, 0]), float(rb[k, 1])),
             )
         )
     return out
-
-
-def audible(model: Any, range_m: float, bearing_rad: float) -> bool:
-    """Whether a robot centre at ``range_m``, ``bearing_rad`` (robot frame) lies in a cone of
-    the sonar ``model`` (a ``SonarModel``) at a distance from the transducers within its range."""
-    distance, bearing = sonar_polar(range_m, bearing_rad, model.mount_x_m)
-    off = np.abs((bearing - model.sector_centres_rad() + math.pi) % (2 * math.pi) - math.pi)
-    in_cone = bool((off <= 0.5 * model.sector_widths_rad()).any())
-    return in_cone and model.min_range_m <= distance <= model.max_range_m
 
 
 def match(
@@ -845,7 +851,10 @@ def main() -> None:
             "config": asdict(config.vision_robots),
             "sonar_filter": asdict(config.sonar_filter),
             "cnn_robots": asdict(config.cnn_robots),
-            "cnn": {k: str(v) for k, v in asdict(config.cnn).items()},
+            "cnn": {
+                k: Path(v).name if k == "weights" else str(v)  # no host paths in the results
+                for k, v in asdict(config.cnn).items()
+            },
             "torch_threads": 1,
             "note": "default_lighting / randomised_lighting: the vision front end (as before "
             "the other front ends were added); every front end under its own key",

@@ -66,13 +66,14 @@ import numpy as np
 import torch
 from numpy.typing import NDArray
 from robot_detection import head_policy as look_at
-from robot_detection import parse_seeds, projected_box
+from robot_detection import parse_seeds
+from robot_detection import wholly_in_view as in_view
 from scipy.optimize import linear_sum_assignment
 from seed000_experiments import series_plot
 
 import spl_env  # noqa: F401  (registers the envs)
 from agents.baselines import HeadScan
-from perception.geometry import FloatArray, range_bearing
+from perception.geometry import FloatArray
 from perception.representations import ROBOT_TRACKS
 
 ENV_ID = "SPL/ActiveVision-v1"
@@ -84,7 +85,6 @@ GOSPA_ALPHA = 2
 MATCH_M = 0.5  # CLEAR MOT match threshold; a track this near a robot tracks it
 RECENT_S = 2.0  # a robot in view within this long ago should be tracked
 HEAD_SWITCH_S = 2.0  # the head policy picks a new robot this often
-MAX_OCCLUDED_FRACTION = 0.3  # of a robot's image box covered by a nearer robot's: not in view
 CAUSE_M = 0.5  # a false track this near a pole or goal post is blamed on it
 RESULTS = Path("benchmarks/results")
 HEADS = {
@@ -236,32 +236,6 @@ class ClearMot:
 
 
 # ----- the episode --------------------------------------------------------------------------
-def in_view(env: Any) -> NDArray[np.bool_]:
-    """(R,) whether each other robot is wholly in our camera image (its standing box, feet
-    included) and its box is at most ``MAX_OCCLUDED_FRACTION`` covered by a nearer robot's:
-    what the detectors can see (as in ``benchmarks/robot_detection.py``, from geometry)."""
-    u = env.unwrapped
-    state = u.world_state
-    model = u.config.sensors.camera.model
-    eye, rotation = u.robots[0].camera_pose_world()
-    ranges = range_bearing(state.robot_pose, state.robots[:, :2])[:, 0]
-    boxes = [projected_box(eye, rotation, u.robots[k].pose, model) for k in state.others]
-    out = np.zeros(len(boxes), dtype=bool)
-    for k, (box, front) in enumerate(boxes):
-        inside = front and box[0] >= 0 and box[2] <= model.width - 1 and box[3] <= model.height - 1
-        if not inside:
-            continue
-        area = max((box[2] - box[0]) * (box[3] - box[1]), 1e-9)
-        covered = 0.0
-        for j, (other, other_front) in enumerate(boxes):
-            if j != k and other_front and ranges[j] < ranges[k]:
-                w = min(box[2], other[2]) - max(box[0], other[0])
-                h = min(box[3], other[3]) - max(box[1], other[1])
-                covered = max(covered, w * h / area if w > 0 and h > 0 else 0.0)
-        out[k] = covered <= MAX_OCCLUDED_FRACTION
-    return out
-
-
 def choose_target(rng: np.random.Generator, robots: FloatArray, pose: FloatArray) -> int:
     """Index of the other robot to look at: a random one of those within ``RADIUS_M`` of our
     true ``pose`` (3,), else a random one of all ``robots`` (R, 3) (field frame, m)."""

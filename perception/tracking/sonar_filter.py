@@ -41,7 +41,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.cluster.hierarchy import fcluster, linkage
 
-from perception.geometry import FloatArray
+from perception.geometry import FloatArray, wrap_angle
 from perception.sensor_models import N_SONAR_SECTORS, SonarModel
 from perception.types import RobotSighting
 from perception.validation import (
@@ -282,6 +282,25 @@ def sonar_polar(range_m: float, bearing_rad: float, mount_x_m: float) -> tuple[f
     return math.hypot(x, y), math.atan2(y, x)
 
 
+def sonar_cones(
+    model: SonarModel, range_m: float, bearing_rad: float
+) -> tuple[float, NDArray[np.bool_]]:
+    """A robot-frame point at ``range_m`` (m) and ``bearing_rad`` (rad) from the robot origin:
+    its distance (m) from ``model``'s transducers and which of the sectors' cones (3,) hold it,
+    seen from the transducers (within half a sector's width of its centre; sectors overlap)."""
+    distance, bearing = sonar_polar(range_m, bearing_rad, model.mount_x_m)
+    off_axis = np.abs(wrap_angle(bearing - model.sector_centres_rad()))
+    return distance, off_axis <= 0.5 * model.sector_widths_rad()
+
+
+def audible(model: SonarModel, range_m: float, bearing_rad: float) -> bool:
+    """Whether ``model``'s sonar can hear an object whose centre lies at ``range_m`` (m) and
+    ``bearing_rad`` (rad) from the robot origin: in one of its cones at a distance from the
+    transducers within its range (:func:`sonar_cones`)."""
+    distance, in_cone = sonar_cones(model, range_m, bearing_rad)
+    return bool(in_cone.any()) and model.min_range_m <= distance <= model.max_range_m
+
+
 def origin_range(
     sonar_range_m: float, bearing_rad: float, mount_x_m: float, near_m: float
 ) -> tuple[float, float] | None:
@@ -387,9 +406,7 @@ def _matches(
 ) -> list[tuple[float, int]]:
     """``(predicted echo distance, index)`` of each observation in ``observations`` that matches
     ``sighting``: in one of its sector's cones and within the match tolerance."""
-    distance, bearing = sonar_polar(sighting.range_m, sighting.bearing_rad, model.mount_x_m)
-    off_axis = np.abs((bearing - model.sector_centres_rad() + math.pi) % (2.0 * math.pi) - math.pi)
-    in_cone = off_axis <= 0.5 * model.sector_widths_rad()
+    distance, in_cone = sonar_cones(model, sighting.range_m, sighting.bearing_rad)
     predicted = distance - config.target_depth_m
     tolerance = config.match_tolerance_m(predicted)
     return [

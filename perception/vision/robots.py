@@ -721,8 +721,8 @@ class RobotDetector:
         inner = (math.floor(cols[0] - 0.25 * size), math.ceil(cols[1] + 0.25 * size))
         best: tuple[int, _Cluster] | None = None
         min_rows = int(np.clip(round(cam.fy * cfg.team_min_height_m / depth), 1, 5))
+        max_width = cfg.team_max_width * size
         for team, ranges in enumerate(self._teams):
-            max_width = cfg.team_max_width * size
             found = self._cluster(
                 image, rows, window, ranges, cfg.min_waistband_px, max_width, inner, min_rows
             )

@@ -17,9 +17,11 @@ from perception.tracking.sonar_filter import (
     SonarFilter,
     SonarFilterConfig,
     SonarObservation,
+    audible,
     cluster_ranges,
     confirm_with_sonar,
     origin_range,
+    sonar_cones,
     sonar_polar,
 )
 from perception.types import RobotSighting
@@ -328,6 +330,17 @@ def test_sonar_observation_rejects_bad_fields(kwargs):
 
 
 # ----- the mount geometry --------------------------------------------------------------------
+def test_audible_needs_a_cone_and_the_range_seen_from_the_transducers():
+    # straight ahead, 0.30 m from the origin is 0.25 m from the transducers: the nearest heard
+    assert audible(MODEL, 0.301, 0.0) and not audible(MODEL, 0.299, 0.0)
+    assert audible(MODEL, 2.599, 0.0) and not audible(MODEL, 2.601, 0.0)  # 2.55 m + the mount
+    # 57.9° from the transducers (53° from the origin at 0.5 m): beyond the left cone's 55°
+    assert not audible(MODEL, 0.5, math.radians(53.0)) and audible(MODEL, 0.5, math.radians(50.0))
+    distance, in_cone = sonar_cones(MODEL, 1.0, math.radians(10.0))
+    assert distance == pytest.approx(sonar_polar(1.0, math.radians(10.0), MODEL.mount_x_m)[0])
+    assert in_cone.tolist() == [True, True, False]  # left (-5°..55°) and middle (-20°..20°)
+
+
 def test_sonar_polar_sees_points_from_the_transducers():
     assert sonar_polar(1.0, 0.0, 0.05) == pytest.approx((0.95, 0.0))
     distance, bearing = sonar_polar(1.0, math.radians(90.0), 0.05)

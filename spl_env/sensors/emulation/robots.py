@@ -29,7 +29,7 @@ import numpy as np
 
 from perception.geometry import project_points, range_bearing, wrap_angle
 from perception.sensor_models import SonarModel
-from perception.tracking.sonar_filter import sonar_polar
+from perception.tracking.sonar_filter import audible
 from perception.types import CameraModel, CameraState, RobotSighting
 from perception.validation import check_in_interval, check_positive
 from spl_env.robots.nao import NaoRobot
@@ -194,8 +194,9 @@ class GeometricRobotSightings:
             seen = others[k].team_colours and draw[1] < c.team_probability
             team = others[k].team if seen else None
             confirmed = (
-                c.sonar_check
-                and self._in_sonar_reach(range_m, bearing_rad)
+                self.sonar is not None
+                and c.sonar_check
+                and audible(self.sonar, range_m, bearing_rad)
                 and draw[2] < c.sonar_confirm_probability
             )
             if c.sonar_check and team is None and not confirmed:
@@ -219,13 +220,3 @@ class GeometricRobotSightings:
                 )
             )
         return tuple(sightings)
-
-    def _in_sonar_reach(self, range_m: float, bearing_rad: float) -> bool:
-        """Whether a robot centre at ``(range_m, bearing_rad)`` (robot frame) lies inside one of
-        the sonar's cones and within its range, seen from the transducers."""
-        assert self.sonar is not None
-        s = self.sonar
-        distance, bearing = sonar_polar(range_m, bearing_rad, s.mount_x_m)
-        off_axis = np.abs(wrap_angle(bearing - s.sector_centres_rad()))
-        in_cone = bool(np.any(off_axis <= 0.5 * s.sector_widths_rad()))
-        return in_cone and s.min_range_m <= distance <= s.max_range_m
