@@ -135,6 +135,11 @@ class SonarFilterConfig:
             check_positive(owner, name, getattr(self, name), allow_zero=True)
         check_positive(owner, "min_range_std_m", self.min_range_std_m)
 
+    def confirmed_range_std_m(self, model: SonarModel) -> float:
+        """Range std (m) given to a sonar-confirmed sighting: the sonar ``model``'s range noise,
+        floored at ``min_range_std_m``."""
+        return max(model.range_noise_std_m, self.min_range_std_m)
+
     def match_tolerance_m(self, predicted_m: float) -> float:
         """Largest ``|sonar range - predicted_m|`` (m) that still matches a sighting whose
         predicted echo distance is ``predicted_m`` (m)."""
@@ -383,7 +388,7 @@ def confirm_with_sonar(
         if k not in taken and j not in used:
             taken[k] = j
             used.add(j)
-    sonar_std = max(model.range_noise_std_m, config.min_range_std_m)
+    sonar_std = config.confirmed_range_std_m(model)
     kept: list[RobotSighting] = []
     for k, sighting in enumerate(sightings):
         confirmed = (

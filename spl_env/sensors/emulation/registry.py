@@ -40,7 +40,11 @@ def _vision_robot_sightings(
     scene: SplFieldScene, robots: list[NaoRobot], sensors: RigConfig, perception: PipelineConfig
 ) -> GeometricRobotSightings:
     return GeometricRobotSightings(
-        sensors.geometric_robots_vision, sensors.camera.model, robots, sensors.sonar
+        sensors.geometric_robots_vision,
+        sensors.camera.model,
+        robots,
+        sensors.sonar,
+        perception.sonar_filter,
     )
 
 

@@ -29,7 +29,7 @@ import numpy as np
 
 from perception.geometry import project_points, range_bearing, wrap_angle
 from perception.sensor_models import SonarModel
-from perception.tracking.sonar_filter import audible
+from perception.tracking.sonar_filter import SonarFilterConfig, audible
 from perception.types import CameraModel, CameraState, RobotSighting
 from perception.validation import check_in_interval, check_positive
 from spl_env.robots.nao import NaoRobot
@@ -69,6 +69,8 @@ class GeometricRobotConfig:
             raise ValueError(
                 f"{_OWNER}.band_edges_m must be a tuple of increasing ranges > 0, got {edges!r}"
             )
+        chances = {"team_probability": self.team_probability}
+        chances["sonar_confirm_probability"] = self.sonar_confirm_probability
         for name in ("recall", "range_std_fraction", "bearing_std_rad"):
             values = getattr(self, name)
             if not (isinstance(values, tuple) and len(values) == len(edges) + 1):
@@ -78,27 +80,11 @@ class GeometricRobotConfig:
                 )
             for k, value in enumerate(values):
                 if name == "recall":
-                    check_in_interval(
-                        _OWNER,
-                        f"recall[{k}]",
-                        value,
-                        0.0,
-                        1.0,
-                        low_inclusive=True,
-                        high_inclusive=True,
-                    )
+                    chances[f"recall[{k}]"] = value
                 else:
                     check_positive(_OWNER, f"{name}[{k}]", value)
-        for name in ("team_probability", "sonar_confirm_probability"):
-            check_in_interval(
-                _OWNER,
-                name,
-                getattr(self, name),
-                0.0,
-                1.0,
-                low_inclusive=True,
-                high_inclusive=True,
-            )
+        for name, value in chances.items():
+            check_in_interval(_OWNER, name, value, 0, 1, low_inclusive=True, high_inclusive=True)
         for name in ("max_range_m", "sonar_range_std_fraction"):
             check_positive(_OWNER, name, getattr(self, name))
         if not isinstance(self.sonar_check, bool):
@@ -138,7 +124,8 @@ VISION_ROBOTS = GeometricRobotConfig(
 
 class GeometricRobotSightings:
     """Emulates one front end's ``robot_sightings`` (``config``) for the robot ``robot`` among
-    ``robots`` (module doc); ``sonar`` is the rig's sonar, needed with ``config.sonar_check``."""
+    ``robots`` (module doc); ``sonar`` is the rig's sonar, needed with ``config.sonar_check``,
+    and ``sonar_filter`` the sonar check's settings (default ``SonarFilterConfig()``)."""
 
     def __init__(
         self,
@@ -146,6 +133,7 @@ class GeometricRobotSightings:
         model: CameraModel,
         robots: list[NaoRobot],
         sonar: SonarModel | None = None,
+        sonar_filter: SonarFilterConfig | None = None,
     ) -> None:
         if config.sonar_check and sonar is None:
             raise ValueError(
@@ -156,6 +144,12 @@ class GeometricRobotSightings:
         self.model = model
         self.robots = robots
         self.sonar = sonar
+        # the range std the provider reports for a confirmed sighting
+        self._confirmed_std_m = (
+            (sonar_filter or SonarFilterConfig()).confirmed_range_std_m(sonar)
+            if sonar is not None
+            else 0.0
+        )
 
     def observe(
         self,
@@ -203,10 +197,8 @@ class GeometricRobotSightings:
                 continue
             bearing_std = c.bearing_std_rad[band]
             if confirmed:
-                assert self.sonar is not None
-                reported = max(self.sonar.range_noise_std_m, 1e-3)
                 std = np.array([c.sonar_range_std_fraction * range_m, bearing_std])
-                cov = np.diag([reported**2, bearing_std**2])
+                cov = np.diag([self._confirmed_std_m**2, bearing_std**2])
             else:
                 std = np.array([c.range_std_fraction[band] * range_m, bearing_std])
                 cov = np.diag(std**2)
