@@ -480,6 +480,7 @@ class RobotDetector:
     def _groups(self, boundary: FieldBoundary, state: CameraState) -> list[tuple[int, int]]:
         """Regions ``(k0, k1)`` (inclusive sampled-column indices) of indented columns.
 
+        Runs of indented columns closer than a leg gap are joined (:meth:`_bridge_notches`).
         A run of neighbouring indented columns is split where the ground distance of its
         bottom jumps (by more than ``split_fraction`` of the nearer distance, at least
         ``split_min_m``): robots at different ranges overlapping in the image, or a robot in
@@ -497,7 +498,10 @@ class RobotDetector:
             closed = grey_closing(closed, size=cfg.gap_columns, mode="nearest")
         indented = closed - boundary.smooth >= cfg.min_indent_px
         edges = np.diff(np.concatenate([[0], indented.astype(np.int8), [0]]))
-        runs = zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1, strict=True)
+        rises, falls = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
+        runs = self._bridge_notches(
+            list(zip(rises.tolist(), falls.tolist(), strict=True)), boundary, state
+        )
         groups: list[tuple[int, int]] = []
         for a, b in runs:
             columns = boundary.columns[a : b + 1]
@@ -538,8 +542,32 @@ class RobotDetector:
                     pieces[lo : hi + 1] = [[pieces[lo][0], pieces[hi][1], min(d, pieces[j][2])]]
                     merged = True
                     break
-            groups += [(a + s, a + t) for s, t, _ in pieces]
+            groups += [(a + int(s), a + int(t)) for s, t, _ in pieces]
         return groups
+
+    def _bridge_notches(
+        self, runs: list[tuple[int, int]], boundary: FieldBoundary, state: CameraState
+    ) -> list[tuple[int, int]]:
+        """Runs ``(k0, k1)`` (inclusive sampled-column indices) of indented columns, neighbours
+        joined where the gap between them is narrower than ``notch_m`` at the nearer run's
+        nearest range: a near robot's legs, whose crotch shows the boundary behind them (a
+        goal's net) over more sampled columns than ``gap_columns`` bridges."""
+        cfg, cam = self.config, self.camera
+        joined: list[tuple[int, int]] = []
+        nearest_m: list[float] = []
+        for a, b in runs:
+            ends = boundary.raw[a : b + 1].astype(np.float64)
+            near = float(np.min(self._bottom_distance(boundary.columns[a : b + 1], ends, state)))
+            if joined:
+                gap_px = (a - joined[-1][1] - 1) * cfg.column_step_px
+                nearer = min(near, nearest_m[-1])
+                if gap_px < cam.fx * cfg.notch_m / max(nearer, 0.1):
+                    joined[-1] = (joined[-1][0], b)
+                    nearest_m[-1] = nearer
+                    continue
+            joined.append((a, b))
+            nearest_m.append(near)
+        return joined
 
     def _bottom_distance(
         self, columns: NDArray[np.intp], ends: FloatArray, state: CameraState

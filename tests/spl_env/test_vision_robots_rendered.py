@@ -97,3 +97,29 @@ def test_robots_found_with_team_range_and_bearing(env: Any, k: int) -> None:
         if i not in matched and s.team is not None and s.range_m < EXTRA_M
     ]
     assert not extra, f"team-coloured sightings of no robot: {extra}"
+
+
+def test_robot_before_the_net_is_one_robot_not_two_legs(env: Any) -> None:
+    """A robot 1.4 m away standing just before a goal's net, facing us: the net shows between
+    its legs over more columns than the boundary's gap bridging closes; the legs still make one
+    robot (not two goal-post-wide pieces), ranged within 5 %."""
+    u = env.unwrapped
+    dims = u.config.scene.dimensions
+    u.scene.place_ball(np.array([0.0, 2.9]))
+    ours = np.array([dims.half_length_m - 1.5, 0.0, 0.0])
+    u.robots[0].place(ours, head=np.array([0.0, 0.1]))
+    goalie = np.array([dims.half_length_m - 0.1, 0.0])
+    u.robots[1].place(np.array([*goalie, math.pi]))
+    for j, y in ((2, 2.5), (3, -2.5)):  # the others out of view
+        u.robots[j].place(np.array([0.0, y, 0.0]))
+    image, _ = u.rig.camera_view(u.world)
+    detector = RobotDetector(RobotDetectorConfig(), u.config.sensors.camera.model)
+    candidates = detector.candidates(image, u.robots[0].camera_state())
+    truth = range_bearing(ours, goalie[None, :])[0]
+    centre_px = u.config.sensors.camera.model.cx  # the robot stands in the middle of the view
+    near = [c for c in candidates if abs(np.mean(c.box[[0, 2]]) - centre_px) < 40]
+    assert [c.rejected for c in near] == [None], [(c.rejected, c.box) for c in near]
+    sighting = near[0].sighting
+    assert sighting is not None
+    assert abs(sighting.range_m - truth[0]) < 0.05 * truth[0]
+    assert abs(float(wrap_angle(sighting.bearing_rad - truth[1]))) < BEARING_TOL_RAD
