@@ -47,7 +47,8 @@ noise and dropouts); the same seeds serve the three goalie positions. Reported f
 seeds 100-109 (the default; nothing was tuned, seeds 0-1 served to debug the script)::
 
     python benchmarks/penalty_shootout.py                      # ~5 min on 2 cores
-    python benchmarks/penalty_shootout.py --self-pose oracle   # the ablation below
+    python benchmarks/penalty_shootout.py --self-pose oracle   # the ablations below
+    python benchmarks/penalty_shootout.py --self-pose truth
     python benchmarks/penalty_shootout.py --runs 3 --seeds 0-9 --out /tmp/shootout
 
 Writes ``penalty_shootout.json`` (per run and per position: medians and ranges),
@@ -56,7 +57,9 @@ Writes ``penalty_shootout.json`` (per run and per position: medians and ranges),
 ``--out`` (``benchmarks/results``). ``--self-pose oracle`` (files ``penalty_shootout_oracle*``)
 replaces SLAM by the oracle self pose (the true pose with fresh white noise each frame,
 ``OracleConfig``: 5 cm, 0.02 rad): a well-localised striker, as seed 004's was on a field it
-knew, to separate the detection and tracking error from dead reckoning's.
+knew, to separate the detection and tracking error from dead reckoning's. ``--self-pose truth``
+(files ``penalty_shootout_truth*``) gives the oracle a noise of 1 nm / 1 nrad: the striker knows
+its pose, and what is left is the error of detection and tracking alone.
 """
 
 from __future__ import annotations
@@ -77,6 +80,7 @@ from seed000_experiments import series_plot  # benchmarks/ is the script's folde
 from perception.geometry import FloatArray, invert, project_points, transform_points, wrap_angle
 from perception.pipeline import PerceptionPipeline, PipelineConfig
 from perception.providers.base import PerceptionContext
+from perception.providers.oracles import OracleConfig
 from perception.representations import ROBOT_SIGHTINGS, ROBOT_TRACKS, SELF_POSE
 from perception.types import (
     GroundTruth,
@@ -100,6 +104,7 @@ WALK_SPEED_MPS = 0.2  # forward walk command (m/s)
 STOP_TOLERANCE_M = 0.005  # the walk command is zero once this close to the kick position (m)
 HEAD_PITCH_RAD = 0.1  # fixed head pitch (rad, + down); head yaw 0
 MAX_STEPS = 200  # safety limit on control steps per run
+TRUTH_STD = 1e-9  # --self-pose truth: the oracle's pose noise (m and rad)
 # A sighting/track (robot frame) is the goalie's within MATCH_LATERAL_M across the line of sight
 # (a Nao's half width, arms included) and MATCH_RANGE_FRACTION of the true range along it (the
 # sonar-confirmed ranges are good to a few cm; 15 % keeps the false tracks at the goal posts and
@@ -656,17 +661,23 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=RESULTS, help="output folder")
     parser.add_argument(
         "--self-pose",
-        choices=("ekf_slam", "oracle"),
+        choices=("ekf_slam", "oracle", "truth"),
         default="ekf_slam",
         help="the striker's self pose: the default EKF SLAM, or the oracle ablation (the true "
-        "pose with white noise, OracleConfig's 5 cm / 0.02 rad); oracle outputs are named "
-        "penalty_shootout_oracle*",
+        "pose with white noise, OracleConfig's 5 cm / 0.02 rad) or the true pose (the oracle "
+        "with 1 nm / 1 nrad noise); outputs named penalty_shootout_<self pose>*",
     )
     args = parser.parse_args()
     seeds = parse_seeds(args.seeds)[: args.runs]
-    perception = replace(PipelineConfig(), robot_sightings="vision", self_pose=args.self_pose)
+    oracle = OracleConfig(position_std_m=TRUTH_STD, heading_std_rad=TRUTH_STD)
+    perception = replace(
+        PipelineConfig(),
+        robot_sightings="vision",
+        self_pose="ekf_slam" if args.self_pose == "ekf_slam" else "oracle",
+        oracle=oracle if args.self_pose == "truth" else OracleConfig(),
+    )
     config = EnvConfig(perception=perception)
-    stem = "penalty_shootout" + ("" if args.self_pose == "ekf_slam" else "_oracle")
+    stem = "penalty_shootout" + ("" if args.self_pose == "ekf_slam" else f"_{args.self_pose}")
     stack = build_stack(config)
     t0 = time.perf_counter()
     runs: dict[str, list[RunSummary]] = {}
@@ -721,6 +732,10 @@ def setup_record(config: EnvConfig) -> dict[str, Any]:
         "pipeline": {
             "robot_sightings": config.perception.robot_sightings,
             "self_pose": config.perception.self_pose,
+            "oracle_pose_std_m_rad": [
+                config.perception.oracle.position_std_m,
+                config.perception.oracle.heading_std_rad,
+            ],
             "slam_backend": config.perception.slam.backend,
             "pole_sightings": config.perception.pole_sightings,
         },
