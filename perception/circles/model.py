@@ -34,7 +34,7 @@ BRANCHES: tuple[Branch, ...] = ("convex", "concave")
 @dataclass(frozen=True)
 class PolarCircle:
     """A circle in the sensor's polar frame: centre at distance ``rho`` (m) and angle ``theta``
-    (rad, wrapped to (-pi, pi]), radius ``R`` (m). The origin lies outside it (``R < rho``)."""
+    (rad, wrapped to [-pi, pi)), radius ``R`` (m). The origin lies outside it (``R < rho``)."""
 
     rho: float
     theta: float
