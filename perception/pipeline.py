@@ -18,6 +18,7 @@ Provider choice, by representation (:data:`PROVIDERS`; the defaults of
     image ──► robot_sightings [vision_only]                  ├──► robot_tracks [tracker]
     image_detections ──► robot_sightings [cnn | oracle] ─────┘
     sonar ──► sonar_observations [filter]
+    laser, self_pose ──► circle_map [laser]
 
 A representation an emulator delivers (``emulated``: the geometric camera mode's pole
 sightings) is read from :attr:`perception.types.SensorFrame.emulated` instead of a provider.
@@ -31,8 +32,10 @@ from typing import Any
 
 import numpy as np
 
+from perception.circles.circle_map import CircleMapConfig
 from perception.geometry import FloatArray
 from perception.providers.base import PerceptionContext, Provider
+from perception.providers.circles import LaserCircleMap
 from perception.providers.odometry import DeadReckoning
 from perception.providers.oracles import (
     OracleConfig,
@@ -55,6 +58,7 @@ from perception.providers.robots import (
 )
 from perception.providers.slam import EkfSlamProvider
 from perception.representations import (
+    CIRCLE_MAP,
     FRAME_INPUTS,
     IMAGE_DETECTIONS,
     ODOMETRY_POSE,
@@ -102,6 +106,7 @@ PROVIDERS: Mapping[str, Mapping[str, ProviderFactory]] = {
     },
     SONAR_OBSERVATIONS: {"filter": lambda c, ctx: FilteredSonar(c.sonar_filter)},
     ROBOT_TRACKS: {"tracker": lambda c, ctx: TrackedRobots(c.robot_tracker)},
+    CIRCLE_MAP: {"laser": lambda c, ctx: LaserCircleMap(c.circle_mapper)},
 }
 
 
@@ -141,6 +146,7 @@ class PipelineConfig:
     vision_robots: RobotDetectorConfig = field(default_factory=RobotDetectorConfig)
     sonar_filter: SonarFilterConfig = field(default_factory=SonarFilterConfig)
     robot_tracker: RobotTrackerConfig = field(default_factory=RobotTrackerConfig)
+    circle_mapper: CircleMapConfig = field(default_factory=CircleMapConfig)
     oracle: OracleConfig = field(default_factory=OracleConfig)
 
     def __post_init__(self) -> None:

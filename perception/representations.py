@@ -22,6 +22,8 @@ name                   value
 ``sonar_observations`` ``tuple[SonarObservation, ...]``: reliable sonar echo clusters per
                        sector (seed 004's sonar filter)
 ``robot_tracks``       ``tuple[RobotTrack, ...]``: tracked robots (field frame)
+``circle_map``         ``tuple[MappedCircle, ...]``: static circles mapped from laser
+                       scans (field frame), by id
 =====================  ================================================================
 """
 
@@ -44,6 +46,7 @@ SELF_POSE = "self_pose"
 ROBOT_SIGHTINGS = "robot_sightings"
 SONAR_OBSERVATIONS = "sonar_observations"
 ROBOT_TRACKS = "robot_tracks"
+CIRCLE_MAP = "circle_map"
 REPRESENTATIONS = (
     ODOMETRY_POSE,
     IMAGE_DETECTIONS,
@@ -53,6 +56,7 @@ REPRESENTATIONS = (
     ROBOT_SIGHTINGS,
     SONAR_OBSERVATIONS,
     ROBOT_TRACKS,
+    CIRCLE_MAP,
 )
 
 # the SensorFrame fields a provider may read (all but its time and the emulated representations)

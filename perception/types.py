@@ -200,6 +200,21 @@ class RobotTrack:
 
 
 @dataclass(frozen=True, kw_only=True)
+class MappedCircle:
+    """One circle of the circle map (field frame).
+
+    ``state`` (3,) ``(x, y, R)`` (m) with covariance ``cov`` (3, 3); ``hits`` the sightings
+    fused into it; ``confirmed`` once it has enough of them; ``circle_id`` stays with it.
+    """
+
+    circle_id: int
+    state: FloatArray
+    cov: FloatArray
+    hits: int
+    confirmed: bool
+
+
+@dataclass(frozen=True, kw_only=True)
 class GroundTruth:
     """The true world, for oracle providers only (field frame, SI units).
 

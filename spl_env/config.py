@@ -15,7 +15,7 @@ import typing
 from dataclasses import dataclass, field
 
 from perception.pipeline import PipelineConfig
-from perception.validation import check_choice
+from perception.validation import check_choice, check_int
 from spl_env.robots.nao import RobotConfig
 from spl_env.scenes.spl_field import SceneConfig
 from spl_env.sensors.rig import RigConfig
@@ -47,7 +47,9 @@ class EnvConfig:
     ``info_level``: ``"full"`` (perception, ground truth and reward terms in ``info``) or
     ``"light"`` (reward terms only, for fast training). ``info_timing`` adds the step's
     wall-clock seconds as ``info["timing"]``; off by default, because seconds measure the host,
-    not the world, and would break same-seed comparisons of ``info``.
+    not the world, and would break same-seed comparisons of ``info``. With the laser on
+    (``sensors.laser``), the observation holds the ``observed_circles`` nearest circles of the
+    circle map and ``info`` the whole map.
     """
 
     scene: SceneConfig = field(default_factory=SceneConfig)
@@ -59,6 +61,7 @@ class EnvConfig:
     physics_dt_s: float = 0.01  # PyBullet time step for the ball
     info_level: str = "full"
     info_timing: bool = False
+    observed_circles: int = 12  # circle-map rows of the observation (with the laser on)
 
     def __post_init__(self) -> None:
         if not (0 < self.physics_dt_s <= min(self.control_dt_s, 0.1)) or not (
@@ -84,6 +87,7 @@ class EnvConfig:
                 "EnvConfig.scene.poles_enabled must be True: the SPL envs map the poles"
             )
         check_choice("EnvConfig", "info_level", self.info_level, INFO_LEVELS)
+        check_int("EnvConfig", "observed_circles", self.observed_circles, 1)
         task_class = typing.get_type_hints(type(self))["task"]
         if not isinstance(self.task, task_class):
             raise TypeError(

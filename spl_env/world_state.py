@@ -20,7 +20,8 @@ class WorldState:
     ``poses[k]`` (3,) ``(x, y, θ)``, head angles ``heads[k]`` (2,) (yaw, pitch; rad) and
     ``blocked[k]``, whether it bumped into something this step. Robot ``agent`` is the one the
     env's policy drives (ours). ``ball`` (2,) and ``ball_velocity`` (2,) (m, m/s);
-    ``landmarks`` (L, 2) pole positions with ``landmark_ids`` (L,).
+    ``landmarks`` (L, 2) pole positions with ``landmark_ids`` (L,); ``circles`` (K, 3) the
+    static circular objects ``(x, y, R)`` (m): goal posts and poles.
     """
 
     time_s: float
@@ -35,6 +36,7 @@ class WorldState:
     ball_velocity: FloatArray
     landmarks: FloatArray
     landmark_ids: NDArray[np.int64]
+    circles: FloatArray
 
     @property
     def robot_pose(self) -> FloatArray:

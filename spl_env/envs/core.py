@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 from perception.geometry import FloatArray, wrap_angle
 from perception.pipeline import PerceptionPipeline
 from perception.providers.base import PerceptionContext
-from perception.representations import POLE_SIGHTINGS, PerceptionOutput
+from perception.representations import CIRCLE_MAP, POLE_SIGHTINGS, PerceptionOutput
 from perception.types import SensorFrame
 from spl_env.config import SPL_ALIASES, EnvConfig
 from spl_env.envs.info import (
@@ -36,6 +36,7 @@ from spl_env.envs.info import (
     perception_info,
 )
 from spl_env.observations.base import EncoderInput, compose_space, encode_all
+from spl_env.observations.circles import CircleMapEncoder
 from spl_env.overrides import apply_overrides
 from spl_env.rendering import TopDownView, draw_detections, side_by_side
 from spl_env.robots.nao import NaoCommand, NaoRobot
@@ -99,6 +100,8 @@ class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
             ),
         )
         self.encoders = self.task.encoders()
+        if cfg.sensors.laser is not None:  # the laser maps circles
+            self.encoders += (CircleMapEncoder(cfg.observed_circles),)
         self.observation_space = compose_space(self.encoders)
         self._action_box = self.task.action_space
         self.action_space = self._action_box
@@ -107,6 +110,8 @@ class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
         outputs |= set(self.task.reward_requires())
         if cfg.info_level == "full":
             outputs |= set(FULL_INFO_REQUIRES)
+            if cfg.sensors.laser is not None:
+                outputs.add(CIRCLE_MAP)
         self.perception_context = PerceptionContext(
             cfg.sensors.camera.model, self.scene.codes, cfg.scene.poles.geometry
         )
@@ -134,6 +139,7 @@ class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
         self._info_layout = InfoLayout(
             landmark_ids=self.scene.landmark_ids,
             max_robots=cfg.perception.robot_tracker.max_tracks,
+            max_circles=cfg.perception.circle_mapper.max_circles,
         )
         self._top_down = TopDownView(self.scene.dimensions)
         self._initial_state = self.world.save_state()
@@ -314,6 +320,7 @@ class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
             ball_velocity=ball_velocity,
             landmarks=self.scene.landmarks,
             landmark_ids=self.scene.landmark_ids,
+            circles=self.scene.obstacles,
         )
 
     def _current(self) -> tuple[WorldState, SensorFrame, PerceptionOutput]:

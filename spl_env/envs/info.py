@@ -14,8 +14,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from perception.representations import ODOMETRY_POSE, POLE_SIGHTINGS, ROBOT_TRACKS, SELF_POSE
-from perception.types import LandmarkObservation, RobotTrack, SlamEstimate
+from perception.representations import (
+    CIRCLE_MAP,
+    ODOMETRY_POSE,
+    POLE_SIGHTINGS,
+    ROBOT_TRACKS,
+    SELF_POSE,
+)
+from perception.types import LandmarkObservation, MappedCircle, RobotTrack, SlamEstimate
 from spl_env.world_state import WorldState
 
 
@@ -27,11 +33,12 @@ def _rows(ids: NDArray[np.int64], landmark_ids: NDArray[np.int64]) -> NDArray[np
 
 @dataclass(frozen=True)
 class InfoLayout:
-    """The fixed sizes of an env's ``info``: its poles' ids (L,) in row order and the number of
-    robot-track rows."""
+    """The fixed sizes of an env's ``info``: its poles' ids (L,) in row order, the number of
+    robot-track rows and of circle-map rows."""
 
     landmark_ids: NDArray[np.int64]
     max_robots: int
+    max_circles: int
 
 
 def self_pose_info(slam: SlamEstimate, layout: InfoLayout) -> dict[str, Any]:
@@ -94,11 +101,32 @@ def robot_tracks_info(tracks: tuple[RobotTrack, ...], layout: InfoLayout) -> dic
     return info
 
 
+def circle_map_info(circles: tuple[MappedCircle, ...], layout: InfoLayout) -> dict[str, Any]:
+    """The confirmed circles of the circle map, ``max_circles`` rows, by circle id:
+    ``circles`` (C, 3) ``(x, y, R)`` (m), ``circle_covs`` (C, 3, 3), ``circle_ids`` (C,) and
+    ``circles_mapped`` (C,) bool; rows past the last circle are zero (ids -1)."""
+    k = layout.max_circles
+    confirmed = sorted((c for c in circles if c.confirmed), key=lambda c: c.circle_id)[:k]
+    info: dict[str, Any] = {
+        "circles": np.zeros((k, 3)),
+        "circle_covs": np.zeros((k, 3, 3)),
+        "circle_ids": np.full(k, -1, dtype=np.int64),
+        "circles_mapped": np.zeros(k, dtype=bool),
+    }
+    for row, circle in enumerate(confirmed):
+        info["circles"][row] = circle.state
+        info["circle_covs"][row] = circle.cov
+        info["circle_ids"][row] = circle.circle_id
+        info["circles_mapped"][row] = True
+    return info
+
+
 PERCEPTION_INFO: Mapping[str, Callable[[Any, InfoLayout], dict[str, Any]]] = {
     SELF_POSE: self_pose_info,
     POLE_SIGHTINGS: pole_sightings_info,
     ODOMETRY_POSE: lambda pose, layout: {"odometry_pose": np.asarray(pose).copy()},
     ROBOT_TRACKS: robot_tracks_info,
+    CIRCLE_MAP: circle_map_info,
 }
 # what the full info always reads; robot tracks join where the env's task already tracks robots
 FULL_INFO_REQUIRES = (SELF_POSE, POLE_SIGHTINGS, ODOMETRY_POSE)
@@ -116,7 +144,8 @@ def perception_info(output: Mapping[str, Any], layout: InfoLayout) -> dict[str, 
 def ground_truth_info(state: WorldState) -> dict[str, Any]:
     """``info["ground_truth"]``: our ``robot_pose`` (3,) and ``head`` (2,); ``landmarks`` (L, 2)
     with ``landmark_ids`` (L,); the other ``robots`` (R, 3) and ``robot_teams`` (R,);
-    ``ball`` (2,) and ``ball_velocity`` (2,)."""
+    ``ball`` (2,) and ``ball_velocity`` (2,); ``circles`` (K, 3) the goal posts and poles as
+    ``(x, y, R)``."""
     return {
         "robot_pose": state.robot_pose.copy(),
         "head": state.head.copy(),
@@ -126,4 +155,5 @@ def ground_truth_info(state: WorldState) -> dict[str, Any]:
         "robot_teams": state.robot_teams.copy(),
         "ball": state.ball.copy(),
         "ball_velocity": state.ball_velocity.copy(),
+        "circles": state.circles.copy(),
     }

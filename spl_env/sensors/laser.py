@@ -26,6 +26,12 @@ class LaserConfig(LaserModel):
     """
 
 
+# A finer scanner for the SPL field, like a Hokuyo UTM-30LX (0.25° steps over 270°, 0.1-30 m),
+# with seed 001's range noise: 0.05 m poles and goal posts take 1-2 beams of the 1° laser at
+# 2-3 m (too few for a segment), 4-8 of this one.
+FINE_LASER = LaserConfig(n_beams=1080, fov_deg=270.0, max_range_m=30.0)
+
+
 class Laser:
     """Ray-cast planar laser scanner; ``model`` (its config) is the geometry and noise it scans
     with."""

@@ -127,6 +127,7 @@ def test_info_contract(env: gym.Env) -> None:
         "robot_teams": (n_others,),
         "ball": (2,),
         "ball_velocity": (2,),
+        "circles": (10, 3),  # 4 goal posts and 6 poles
     }
     np.testing.assert_array_equal(per["landmark_ids"], gt["landmark_ids"])
     # every entry keeps its shape from step to step (vector envs stack them)

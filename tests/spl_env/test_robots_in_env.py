@@ -54,6 +54,7 @@ def state_with(robots: list[tuple[float, float]]) -> WorldState:
         ball_velocity=np.zeros(2),
         landmarks=np.zeros((0, 2)),
         landmark_ids=np.zeros(0, dtype=np.int64),
+        circles=np.zeros((0, 3)),
     )
 
 
