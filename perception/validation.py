@@ -164,6 +164,25 @@ def finite_vector(value: ArrayLike, name: str, size: int) -> FloatArray:
     return array
 
 
+def finite_points(value: ArrayLike, name: str, minimum: int = 0) -> FloatArray:
+    """``value`` as a new finite float64 (N, 2) array of points with N >= ``minimum``; errors
+    name the argument and, for NaN or infinity, the rows holding them."""
+    try:
+        points = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError) as error:
+        raise InvalidTypeError(
+            f"{name} must be an (N, 2) array of numbers, got {value!r}"
+        ) from error
+    if points.ndim != 2 or points.shape[1] != 2 or len(points) < minimum:
+        raise ValueError(
+            f"{name} must have shape (N, 2) with N >= {minimum}, got shape {points.shape}"
+        )
+    if not np.isfinite(points).all():
+        rows = np.flatnonzero(~np.isfinite(points).all(axis=1)).tolist()
+        raise ValueError(f"{name} must be finite, got NaN or infinity in rows {rows}")
+    return points
+
+
 def check_covariance(
     matrix: ArrayLike, name: str, size: int, *, singular_ok: bool = False
 ) -> FloatArray:

@@ -67,6 +67,7 @@ from perception.validation import (
     check_int,
     check_positive,
     check_probability,
+    finite_points,
 )
 
 Rule = Literal["seed", "chi_square"]
@@ -223,7 +224,10 @@ def fuse_circles(
     order of their first member.
     """
     config = _config(config, FusionConfig, "fuse_circles")
-    sets = [_points(f"fuse_circles.point_sets[{i}]", p) for i, p in enumerate(point_sets)]
+    sets = [
+        finite_points(p, f"fuse_circles.point_sets[{i}]", _CIRCLE_PARAMETERS)
+        for i, p in enumerate(point_sets)
+    ]
     fits = [geometric_fit(p) for p in sets]
     covariances = [_kcr(p, fit, config.sigma_m) for p, fit in zip(sets, fits, strict=True)]
     groups = _components(len(sets), lambda i, j: _same_object(i, j, fits, covariances, config))
@@ -245,7 +249,7 @@ def estimate_circle(
     if fewer than 3 points remain or a sensor lies inside the first circle (no tangents).
     """
     config = _config(config, EstimationConfig, "estimate_circle")
-    p = _points("estimate_circle.points", points)
+    p = finite_points(points, "estimate_circle.points", _CIRCLE_PARAMETERS)
     o = _origins(origins, len(p))
     first = geometric_fit(p)
     keep = _off_tangents(p, o, first, config.tangent_margin_rad)
@@ -300,21 +304,6 @@ def _circle_or_none(points: FloatArray) -> CircleFit | None:
         return geometric_fit(points)
     except ValueError:
         return None
-
-
-def _points(name: str, points: ArrayLike) -> FloatArray:
-    """``points`` as a finite float64 (N, 2) array with N >= 3; errors name ``name``."""
-    try:
-        p = np.array(points, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise InvalidTypeError(
-            f"{name} must be an (N, 2) array of numbers, got {points!r}"
-        ) from error
-    if p.ndim != 2 or p.shape[1] != 2 or len(p) < _CIRCLE_PARAMETERS:
-        raise ValueError(f"{name} must have shape (N, 2) with N >= 3, got shape {p.shape}")
-    if not np.isfinite(p).all():
-        raise ValueError(f"{name} must be finite, got {p.tolist()}")
-    return p
 
 
 def _origins(origins: ArrayLike, n: int) -> FloatArray:

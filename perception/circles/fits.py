@@ -41,8 +41,9 @@ from scipy.optimize import least_squares
 
 from perception.circles.model import PolarCircle
 from perception.geometry import FloatArray
-from perception.validation import InvalidTypeError, check_positive, finite_vector
+from perception.validation import InvalidTypeError, check_positive, finite_points, finite_vector
 
+_MIN_POINTS = 3  # a circle has three parameters
 _DEGENERATE_RTOL = 1e-12  # a relative size below which a determinant (or ``A``) counts as zero
 _KCR_MAX_CONDITION = 1e12  # angles this badly conditioned do not pin down a circle
 _LM_TOLERANCE = 1e-12  # ftol, xtol and gtol of the Levenberg-Marquardt iterations
@@ -116,7 +117,7 @@ def geometric_initialisation(points: ArrayLike) -> CircleFit:
     distance to the triplet's first point; triplets of collinear points are skipped,
     ValueError if all are.
     """
-    p = _as_points("geometric_initialisation", points)
+    p = finite_points(points, "geometric_initialisation.points", _MIN_POINTS)
     m = len(p) // 3
     centres, valid = _circumcentres(p[:m], p[m : 2 * m], p[2 * m : 3 * m])
     if not valid.any():
@@ -137,7 +138,7 @@ def bullock_fit(points: ArrayLike) -> CircleFit:
     and ``R^2 = u_c^2 + v_c^2 + (S_uu + S_vv) / N`` (eq. 4.8). ValueError for collinear points
     (the system is singular). Biased towards small circles on short arcs.
     """
-    p = _as_points("bullock_fit", points)
+    p = finite_points(points, "bullock_fit.points", _MIN_POINTS)
     centroid = p.mean(axis=0)
     u, v = (p - centroid).T
     S_uu, S_uv, S_vv = u @ u, u @ v, v @ v
@@ -176,7 +177,7 @@ def geometric_fit(points: ArrayLike, initial: CircleFit | None = None) -> Circle
     Minimises ``sum_i (d_i - R)^2`` by Levenberg-Marquardt from ``initial`` (default: the
     :func:`hyper_fit`). RuntimeError if the iterations do not converge.
     """
-    p = _as_points("geometric_fit", points)
+    p = finite_points(points, "geometric_fit.points", _MIN_POINTS)
     if initial is None:
         initial = hyper_fit(p)
     elif not isinstance(initial, CircleFit):
@@ -201,7 +202,7 @@ def geometric_fit(points: ArrayLike, initial: CircleFit | None = None) -> Circle
 def angles_around_centre(points: ArrayLike, centre: ArrayLike) -> FloatArray:
     """The angles ``phi_i`` (N,) (rad, sensor frame axes) of the points ``(N, 2)`` (m) seen from
     ``centre`` (2,) (m): the angles of the true points that :func:`kcr_covariance` takes."""
-    p = _as_points("angles_around_centre", points)
+    p = finite_points(points, "angles_around_centre.points", _MIN_POINTS)
     offsets = p - finite_vector(centre, "angles_around_centre.centre", 2)
     return np.arctan2(offsets[:, 1], offsets[:, 0])
 
@@ -248,21 +249,6 @@ def kcr_polar_covariance(circle: PolarCircle, angles: ArrayLike, sigma: float) -
     return G @ kcr_covariance(angles, sigma) @ G.T
 
 
-def _as_points(owner: str, points: ArrayLike) -> FloatArray:
-    """``points`` as a new finite float64 (N, 2) array with N >= 3; errors name ``owner``."""
-    try:
-        p = np.array(points, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise InvalidTypeError(
-            f"{owner}.points must be an (N, 2) array of numbers, got {points!r}"
-        ) from error
-    if p.ndim != 2 or p.shape[1] != 2 or p.shape[0] < 3:
-        raise ValueError(f"{owner}.points must have shape (N, 2) with N >= 3, got {p.shape}")
-    if not np.isfinite(p).all():
-        raise ValueError(f"{owner}.points must be finite, got non-finite rows {_bad_rows(p)}")
-    return p
-
-
 def _as_angles(owner: str, angles: ArrayLike) -> FloatArray:
     """``angles`` as a new finite float64 (N,) array with N >= 3; errors name ``owner``."""
     try:
@@ -274,11 +260,6 @@ def _as_angles(owner: str, angles: ArrayLike) -> FloatArray:
     if not np.isfinite(phi).all():
         raise ValueError(f"{owner}.angles must be finite, got {phi}")
     return phi
-
-
-def _bad_rows(points: FloatArray) -> list[int]:
-    """The indices of the rows of ``points`` (N, 2) holding NaN or infinity."""
-    return np.flatnonzero(~np.isfinite(points).all(axis=1)).tolist()
 
 
 def _circumcentres(
@@ -313,7 +294,7 @@ def _algebraic_fit(owner: str, points: ArrayLike, constraint: FloatArray) -> Cir
     largest eigenvalue. A singular ``Z`` means the points lie exactly on a circle, its null
     vector.
     """
-    p = _as_points(owner, points)
+    p = finite_points(points, f"{owner}.points", _MIN_POINTS)
     centroid = p.mean(axis=0)
     scale = np.sqrt(((p - centroid) ** 2).sum(axis=1).mean())
     if scale == 0.0:

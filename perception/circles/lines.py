@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from perception.geometry import FloatArray, wrap_angle
-from perception.validation import InvalidTypeError, check_finite
+from perception.validation import check_finite, finite_points
 
 
 @dataclass(frozen=True, eq=False)
@@ -70,7 +70,7 @@ def fit_line_tls(points: ArrayLike) -> LineFit:
     If the points scatter equally in every direction the line's direction is arbitrary (the
     fit still returns one).
     """
-    p = _as_points("fit_line_tls", points, minimum=2)
+    p = finite_points(points, "fit_line_tls.points", 2)
     if (p == p[0]).all():
         raise ValueError(f"fit_line_tls.points must not all be equal (no direction), got {p[0]}")
     centroid = p.mean(axis=0)
@@ -107,27 +107,5 @@ def orthogonal_residuals(points: ArrayLike, angle: float, distance: float) -> Fl
     """
     check_finite("orthogonal_residuals", "angle", angle)
     check_finite("orthogonal_residuals", "distance", distance)
-    p = _as_points("orthogonal_residuals", points, minimum=0)
+    p = finite_points(points, "orthogonal_residuals.points")
     return p @ np.array([math.cos(angle), math.sin(angle)]) - distance
-
-
-def _as_points(owner: str, points: ArrayLike, *, minimum: int) -> FloatArray:
-    """``points`` as a new finite float64 (N, 2) array with N >= ``minimum``; errors name
-    ``owner.points``."""
-    try:
-        p = np.array(points, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise InvalidTypeError(
-            f"{owner}.points must be an (N, 2) array of numbers, got {points!r}"
-        ) from error
-    if p.ndim != 2 or p.shape[1] != 2 or p.shape[0] < minimum:
-        raise ValueError(
-            f"{owner}.points must have shape (N, 2) with N >= {minimum}, got shape {p.shape}"
-        )
-    if not np.isfinite(p).all():
-        rows = np.flatnonzero(~np.isfinite(p).all(axis=1)).tolist()
-        raise ValueError(
-            f"{owner}.points must be finite (NaN marks a beam with no return: drop it first), "
-            f"got non-finite rows {rows}"
-        )
-    return p

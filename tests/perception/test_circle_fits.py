@@ -275,8 +275,8 @@ def test_hyper_is_less_biased_than_bullock_on_a_half_circle() -> None:
     ("points", "error", "message"),
     [
         (np.zeros((5, 3)), ValueError, r"must have shape \(N, 2\) with N >= 3"),
-        (np.zeros(6), ValueError, r"got \(6,\)"),
-        ([[0.0, 0.0], [1.0, 1.0]], ValueError, r"N >= 3, got \(2, 2\)"),
+        (np.zeros(6), ValueError, r"got shape \(6,\)"),
+        ([[0.0, 0.0], [1.0, 1.0]], ValueError, r"N >= 3, got shape \(2, 2\)"),
         ([[0.0, 0.0], [1.0, np.nan], [2.0, 0.0]], ValueError, r"must be finite.*rows \[1\]"),
         ([["a", "b"], ["c", "d"], ["e", "f"]], InvalidTypeError, "array of numbers"),
     ],

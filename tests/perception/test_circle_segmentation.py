@@ -317,7 +317,11 @@ def test_orthogonal_residuals_are_the_signed_distances() -> None:
     [
         ([[1.0, 2.0]], ValueError, r"fit_line_tls.points must have shape \(N, 2\) with N >= 2"),
         ([[1.0, 2.0, 3.0]] * 3, ValueError, r"shape \(N, 2\).*got shape \(3, 3\)"),
-        ([[1.0, 2.0], [np.nan, 1.0], [2.0, 2.0]], ValueError, r"NaN .*non-finite rows \[1\]"),
+        (
+            [[1.0, 2.0], [np.nan, 1.0], [2.0, 2.0]],
+            ValueError,
+            r"must be finite, got NaN or infinity in rows \[1\]",
+        ),
         ([[1.0, 2.0]] * 4, ValueError, "must not all be equal"),
         ([["a", "b"], ["c", "d"]], TypeError, "must be an \\(N, 2\\) array of numbers"),
     ],

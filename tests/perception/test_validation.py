@@ -20,6 +20,7 @@ from perception.validation import (
     check_int,
     check_positive,
     check_probability,
+    finite_points,
     finite_vector,
     is_finite_real,
 )
@@ -170,6 +171,28 @@ def test_check_choice() -> None:
         check_choice("Config", "mode", None, choices)
     with pytest.raises(TypeError, match=r"^Config\.mode must be a str or None, got int 1$"):
         check_choice("Config", "mode", 1, ["a", "b"], optional=True)
+
+
+def test_finite_points() -> None:
+    source = [[0, 1], [2.5, -3]]
+    points = finite_points(source, "p", 2)
+    assert points.dtype == np.float64 and points.shape == (2, 2)
+    np.testing.assert_array_equal(points, source)
+    assert finite_points(np.zeros((0, 2)), "p").shape == (0, 2)
+    with pytest.raises(
+        ValueError, match=r"^p must have shape \(N, 2\) with N >= 3, got shape \(2, 2\)$"
+    ):
+        finite_points(source, "p", 3)
+    with pytest.raises(
+        ValueError, match=r"^p must have shape \(N, 2\) with N >= 0, got shape \(4,\)$"
+    ):
+        finite_points([1, 2, 3, 4], "p")
+    with pytest.raises(
+        ValueError, match=r"^p must be finite, got NaN or infinity in rows \[0, 2\]$"
+    ):
+        finite_points([[math.nan, 0], [1, 1], [2, math.inf]], "p")
+    with pytest.raises(InvalidTypeError, match=r"^p must be an \(N, 2\) array of numbers"):
+        finite_points([["a", "b"]], "p")
 
 
 def test_finite_vector() -> None:
