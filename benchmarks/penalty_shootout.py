@@ -75,7 +75,8 @@ from typing import Any
 
 import cv2
 import numpy as np
-from seed000_experiments import series_plot  # benchmarks/ is the script's folder
+from robot_detection import parse_seeds  # benchmarks/ is the script's folder
+from seed000_experiments import series_plot
 
 from perception.geometry import FloatArray, invert, project_points, transform_points, wrap_angle
 from perception.pipeline import PerceptionPipeline, PipelineConfig
@@ -642,15 +643,6 @@ def error_plot(runs: dict[str, list[RunSummary]], dt_s: float) -> np.ndarray:
             )
         )
     return np.vstack(panels)
-
-
-def parse_seeds(text: str) -> list[int]:
-    """``"100-109"`` or ``"100,101,105-107"`` as a list of ints."""
-    seeds: list[int] = []
-    for part in text.split(","):
-        low, _, high = part.partition("-")
-        seeds += list(range(int(low), int(high or low) + 1))
-    return seeds
 
 
 def main() -> None:

@@ -32,6 +32,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import torch
+from robot_detection import parse_seeds  # benchmarks/ is the script's folder
 
 import spl_env  # noqa: F401  (registers the envs)
 from agents.baselines import HeadScan
@@ -138,15 +139,6 @@ def markdown(result: dict[str, Any], self_pose: str) -> str:
         "per step.",
     ]
     return "\n".join(lines) + "\n"
-
-
-def parse_seeds(text: str) -> list[int]:
-    """``"100-104"`` or ``"100,101,105-107"`` as a list of ints."""
-    seeds: list[int] = []
-    for part in text.split(","):
-        low, _, high = part.partition("-")
-        seeds += list(range(int(low), int(high or low) + 1))
-    return seeds
 
 
 def main() -> None:
