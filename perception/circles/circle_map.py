@@ -183,10 +183,11 @@ class CircleMapper:
                 updated |= self._fuse(candidate, pose, pose_cov)
         origin = pose[:2] + mount_x_m * np.array([math.cos(pose[2]), math.sin(pose[2])])
         beta = pose[2] + np.asarray(angles, dtype=np.float64)
+        directions = np.column_stack([np.cos(beta), np.sin(beta)])  # (B, 2), field frame
         for circle in self._circles:
             if circle.circle_id in updated:
                 circle.misses = 0
-            elif self._seen_through(circle, origin, beta, scan, pose, pose_cov):
+            elif self._seen_through(circle, origin, directions, scan, pose, pose_cov):
                 circle.misses += 1
         cfg = self.config
         self._circles = [
@@ -201,30 +202,29 @@ class CircleMapper:
         self,
         circle: _Circle,
         origin: FloatArray,
-        beta: FloatArray,
+        directions: FloatArray,
         scan: FloatArray,
         pose: FloatArray,
         pose_cov: FloatArray,
     ) -> bool:
-        """Whether the scan (field directions ``beta`` (B,) from ``origin``) saw through the
-        whole place where ``circle`` may be: every beam that may meet it, passing its centre
-        closer than ``R`` plus three standard deviations of where the centre lies across the
-        beam (the circle's and the believed pose's uncertainty, the heading's times the range),
-        returned from farther than the centre's depth plus ``R`` and three standard deviations
-        along the beam."""
+        """Whether the scan (unit beam ``directions`` (B, 2) from ``origin``, field frame) saw
+        through the whole place where ``circle`` may be: every beam that may meet it, passing
+        its centre closer than ``R`` plus three standard deviations of where the centre lies
+        across the beam (the circle's and the believed pose's uncertainty, the heading's times
+        the range), returned from farther than the centre's depth plus ``R`` and three standard
+        deviations along the beam."""
         offset = circle.x[:2] - origin
         rho = float(np.hypot(*offset))
         radius = float(circle.x[2])
         if not 0.0 < radius < rho:
             return False
-        lever = circle.x[:2] - pose[:2]
-        J = np.array([[1.0, 0.0, -lever[1]], [0.0, 1.0, lever[0]]])
+        J = _centre_pose_jacobian(circle.x[:2], pose)
         spread = circle.P[:2, :2] + J @ pose_cov @ J.T
         across = np.array([-offset[1], offset[0]]) / rho
         lateral_std = math.sqrt(float(across @ spread @ across))
-        phi = math.atan2(offset[1], offset[0])
-        depth = rho * np.cos(beta - phi)
-        band = (depth > 0.0) & (np.abs(rho * np.sin(beta - phi)) < radius + 3.0 * lateral_std)
+        depth = directions @ offset  # the centre's depth along each beam
+        miss_distance = np.abs(directions[:, 0] * offset[1] - directions[:, 1] * offset[0])
+        band = (depth > 0.0) & (miss_distance < radius + 3.0 * lateral_std)
         if not band.any():
             return False
         along_std = math.sqrt(self.config.range_sigma_m**2 + float(np.trace(spread)))
@@ -295,8 +295,7 @@ class CircleMapper:
         error swings the centre about the robot)."""
         std = 0.5 * candidate.rough[2] + self.config.range_sigma_m
         cov = np.diag([std**2, std**2, (0.5 * candidate.rough[2]) ** 2])
-        lever = candidate.rough[:2] - pose[:2]
-        J = np.array([[1.0, 0.0, -lever[1]], [0.0, 1.0, lever[0]]])  # d centre / d pose
+        J = _centre_pose_jacobian(candidate.rough[:2], pose)
         cov[:2, :2] += J @ pose_cov @ J.T
         return cov
 
@@ -368,3 +367,10 @@ class CircleMapper:
     @staticmethod
     def _valid(x: FloatArray, origin: FloatArray) -> bool:
         return bool(np.isfinite(x).all() and 0.0 < x[2] < np.hypot(*(x[:2] - origin)))
+
+
+def _centre_pose_jacobian(point: FloatArray, pose: FloatArray) -> FloatArray:
+    """(2, 3): how a point (2,) seen from the robot moves in the field when the believed pose
+    (x, y, theta) (3,) moves (a heading error swings it about the robot)."""
+    lever = point - pose[:2]
+    return np.array([[1.0, 0.0, -lever[1]], [0.0, 1.0, lever[0]]])
