@@ -499,14 +499,16 @@ class RobotDetector:
         indented = closed - boundary.smooth >= cfg.min_indent_px
         edges = np.diff(np.concatenate([[0], indented.astype(np.int8), [0]]))
         rises, falls = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
+        raw = boundary.raw.astype(np.float64)
+        raw_distance = self._bottom_distance(boundary.columns, raw, state)
         runs = self._bridge_notches(
-            list(zip(rises.tolist(), falls.tolist(), strict=True)), boundary, state
+            list(zip(rises.tolist(), falls.tolist(), strict=True)), raw_distance
         )
         groups: list[tuple[int, int]] = []
         for a, b in runs:
             columns = boundary.columns[a : b + 1]
-            ends = boundary.raw[a : b + 1].astype(np.float64)
-            nearest = float(np.min(self._bottom_distance(columns, ends, state)))
+            ends = raw[a : b + 1]
+            nearest = float(np.min(raw_distance[a : b + 1]))
             width = math.ceil(cam.fx * cfg.notch_m / max(nearest, 0.1) / step) + 1
             if width >= 2 and len(ends) > 2:
                 ends = grey_closing(ends, size=width, mode="nearest")
@@ -546,18 +548,18 @@ class RobotDetector:
         return groups
 
     def _bridge_notches(
-        self, runs: list[tuple[int, int]], boundary: FieldBoundary, state: CameraState
+        self, runs: list[tuple[int, int]], bottom_distance: FloatArray
     ) -> list[tuple[int, int]]:
         """Runs ``(k0, k1)`` (inclusive sampled-column indices) of indented columns, neighbours
         joined where the gap between them is narrower than ``notch_m`` at the nearer run's
-        nearest range: a near robot's legs, whose crotch shows the boundary behind them (a
-        goal's net) over more sampled columns than ``gap_columns`` bridges."""
+        nearest range (``bottom_distance`` (C,) m: each sampled column's boundary on the
+        ground): a near robot's legs, whose crotch shows the boundary behind them (a goal's
+        net) over more sampled columns than ``gap_columns`` bridges."""
         cfg, cam = self.config, self.camera
         joined: list[tuple[int, int]] = []
         nearest_m: list[float] = []
         for a, b in runs:
-            ends = boundary.raw[a : b + 1].astype(np.float64)
-            near = float(np.min(self._bottom_distance(boundary.columns[a : b + 1], ends, state)))
+            near = float(np.min(bottom_distance[a : b + 1]))
             if joined:
                 gap_px = (a - joined[-1][1] - 1) * cfg.column_step_px
                 nearer = min(near, nearest_m[-1])
