@@ -3,7 +3,9 @@
 ``reference/active_vision_v0_reference.npz`` was written by this module's :func:`main`
 (``python tests/spl_env/test_reference_rollouts.py PATH``) at the commit before the reshaping
 (``SplSimulation`` and the old pipeline, commit b95a6d7): for the same seed and actions, today's
-observations, rewards, SLAM poses and true poses must match it to 1e-9.
+observations, rewards, SLAM poses and true poses must match it to 1e-9. The default (CNN)
+front end runs a torch network whose float32 kernels round differently on different CPU
+instruction sets (AVX2 / AVX-512): that case is held to 1e-6, a few float32 ulps.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ CASES: dict[str, dict[str, Any]] = {
     },
     "geometric": {"camera_mode": "geometric", "frontend": "colour"},
 }
+ABSOLUTE_TOLERANCE = {"rendered": 1e-6, "rendered_colour_lighting": 1e-9, "geometric": 1e-9}
 SEED, STEPS = 11, 40
 
 
@@ -57,7 +60,9 @@ def test_rollout_matches_the_reference_recorded_before_the_reshaping(case: str) 
     ref = np.load(REFERENCE)
     got = rollout(CASES[case], ref[f"{case}__actions"])
     for name, values in got.items():
-        np.testing.assert_allclose(values, ref[f"{case}__{name}"], rtol=0, atol=1e-9, err_msg=name)
+        np.testing.assert_allclose(
+            values, ref[f"{case}__{name}"], rtol=0, atol=ABSOLUTE_TOLERANCE[case], err_msg=name
+        )
 
 
 def main(path: str) -> None:
