@@ -1,9 +1,13 @@
-"""Estimation metrics: position errors, NEES and landmark-map errors (SI units, field frame)."""
+"""Estimation metrics: position errors, NEES, landmark-map and circle-map errors (SI units, field
+frame)."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import linear_sum_assignment
 
 from perception.geometry import FloatArray, range_bearing, wrap_angle
 
@@ -50,3 +54,45 @@ def landmark_errors(
             if int(i) in truth
         ]
     )
+
+
+@dataclass(frozen=True)
+class CircleMatch:
+    """Mapped circles matched one to one to the true ones (:func:`match_circles`).
+
+    ``mapped_index`` (K,): the mapped circle matched to each true circle, -1 when missed;
+    ``centre_error_m`` and ``radius_error_m`` (K,): its errors (m), NaN when missed;
+    ``spurious`` (M,) bool: the mapped circles matched to no true circle.
+    """
+
+    mapped_index: NDArray[np.intp]
+    centre_error_m: FloatArray
+    radius_error_m: FloatArray
+    spurious: NDArray[np.bool_]
+
+    @property
+    def missed(self) -> NDArray[np.bool_]:
+        """(K,) bool: the true circles without a mapped one."""
+        return self.mapped_index < 0
+
+
+def match_circles(mapped: ArrayLike, truth: ArrayLike, gate_m: float) -> CircleMatch:
+    """Match ``mapped`` (M, 3) circles ``(x, y, R)`` (m) to the ``truth`` (K, 3) one to one,
+    minimising the sum of centre distances (Hungarian assignment), each pair closer than
+    ``gate_m`` (m)."""
+    m = np.asarray(mapped, dtype=np.float64).reshape(-1, 3)
+    t = np.asarray(truth, dtype=np.float64).reshape(-1, 3)
+    distances = np.hypot(*(t[:, None, :2] - m[None, :, :2]).transpose(2, 0, 1))
+    index = np.full(len(t), -1, dtype=np.intp)
+    if len(m) and len(t):
+        rows, cols = linear_sum_assignment(np.where(distances < gate_m, distances, 1e9))
+        close = distances[rows, cols] < gate_m
+        index[rows[close]] = cols[close]
+    found = index >= 0
+    centre = np.full(len(t), np.nan)
+    radius = np.full(len(t), np.nan)
+    centre[found] = distances[found, index[found]]
+    radius[found] = np.abs(m[index[found], 2] - t[found, 2])
+    spurious = np.ones(len(m), dtype=bool)
+    spurious[index[found]] = False
+    return CircleMatch(index, centre, radius, spurious)

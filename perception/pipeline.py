@@ -13,12 +13,14 @@ Provider choice, by representation (:data:`PROVIDERS`; the defaults of
     image  ──► image_detections [cnn] ──► pole_sightings [cnn | colour | oracle]
                                               │
     odometry_delta ───────────────────────────┼──► self_pose [ekf_slam | oracle] ──┐
+    odometry_delta, laser ──► self_pose [circle_slam]
                   └──► odometry_pose            └──► pole_last_seen [history]     │
     image, sonar_observations ──► robot_sightings [vision] ──┐                     │
     image ──► robot_sightings [vision_only]                  ├──► robot_tracks [tracker]
     image_detections ──► robot_sightings [cnn | oracle] ─────┘
     sonar ──► sonar_observations [filter]
     laser, self_pose ──► circle_map [laser]
+    self_pose (circle_slam) ──► circle_map [slam]
 
 A representation an emulator delivers (``emulated``: the geometric camera mode's pole
 sightings) is read from :attr:`perception.types.SensorFrame.emulated` instead of a provider.
@@ -33,8 +35,10 @@ from typing import Any
 import numpy as np
 
 from perception.circles.circle_map import CircleMapConfig
+from perception.circles.scan_circles import ScanCirclesConfig
 from perception.geometry import FloatArray
 from perception.providers.base import PerceptionContext, Provider
+from perception.providers.circle_slam import CircleSlamProvider, SlamCircleMap
 from perception.providers.circles import LaserCircleMap
 from perception.providers.odometry import DeadReckoning
 from perception.providers.oracles import (
@@ -73,6 +77,7 @@ from perception.representations import (
     Prior,
 )
 from perception.slam import EkfSlamConfig
+from perception.slam.circle_slam import CircleSlamConfig
 from perception.tracking.robot_tracker import RobotTrackerConfig
 from perception.tracking.sonar_filter import SonarFilterConfig
 from perception.types import SensorFrame
@@ -97,6 +102,7 @@ PROVIDERS: Mapping[str, Mapping[str, ProviderFactory]] = {
     SELF_POSE: {
         "ekf_slam": lambda c, ctx: EkfSlamProvider(c.slam),
         "oracle": lambda c, ctx: OracleSelfPose(c.oracle),
+        "circle_slam": lambda c, ctx: CircleSlamProvider(c.circle_slam, c.scan_circles),
     },
     ROBOT_SIGHTINGS: {
         "vision": lambda c, ctx: VisionRobotSightings(c.vision_robots, c.sonar_filter, ctx),
@@ -106,8 +112,21 @@ PROVIDERS: Mapping[str, Mapping[str, ProviderFactory]] = {
     },
     SONAR_OBSERVATIONS: {"filter": lambda c, ctx: FilteredSonar(c.sonar_filter)},
     ROBOT_TRACKS: {"tracker": lambda c, ctx: TrackedRobots(c.robot_tracker)},
-    CIRCLE_MAP: {"laser": lambda c, ctx: LaserCircleMap(c.circle_mapper)},
+    CIRCLE_MAP: {
+        "laser": lambda c, ctx: LaserCircleMap(c.circle_mapper),
+        "slam": lambda c, ctx: _slam_circle_map(c),
+    },
 }
+
+
+def _slam_circle_map(config: PipelineConfig) -> SlamCircleMap:
+    """The circle map of circle SLAM; ValueError unless the self pose is circle SLAM."""
+    if config.self_pose != "circle_slam":
+        raise ValueError(
+            "PipelineConfig.circle_map='slam' reads the map of self_pose='circle_slam', "
+            f"got self_pose={config.self_pose!r}"
+        )
+    return SlamCircleMap()
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -146,7 +165,11 @@ class PipelineConfig:
     vision_robots: RobotDetectorConfig = field(default_factory=RobotDetectorConfig)
     sonar_filter: SonarFilterConfig = field(default_factory=SonarFilterConfig)
     robot_tracker: RobotTrackerConfig = field(default_factory=RobotTrackerConfig)
+    circle_map: str = "laser"  # one of PROVIDERS["circle_map"]
     circle_mapper: CircleMapConfig = field(default_factory=CircleMapConfig)
+    # self_pose="circle_slam": EKF SLAM over circles from wheel odometry and laser circles
+    circle_slam: CircleSlamConfig = field(default_factory=CircleSlamConfig)
+    scan_circles: ScanCirclesConfig = field(default_factory=ScanCirclesConfig)
     oracle: OracleConfig = field(default_factory=OracleConfig)
 
     def __post_init__(self) -> None:

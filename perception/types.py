@@ -242,6 +242,8 @@ class SensorFrame:
     - ``image``: (H, W, 3) uint8 RGB, or ``None`` when nothing was rendered;
     - ``sonar``: (3, E) echo distances (m) of the left/middle/right sectors, NaN-padded, or
       ``None``; ``sonar_model`` its sector geometry and noise;
+    - ``sonar_ring``: (S,) ranges (m) of a ring of single sonars (a Pioneer's sixteen), one
+      per sonar in the robot's ring order, NaN for no echo, or ``None``;
     - ``laser``: (B,) ranges (m) with NaN for no return, or ``None``; ``laser_model`` its beam
       angles (:meth:`perception.sensor_models.LaserModel.beam_angles`) and noise;
     - ``emulated``: representations that a fast emulator produced in place of their providers
@@ -256,6 +258,7 @@ class SensorFrame:
     image: NDArray[np.uint8] | None = None
     sonar: FloatArray | None = None
     sonar_model: SonarModel | None = None
+    sonar_ring: FloatArray | None = None
     laser: FloatArray | None = None
     laser_model: LaserModel | None = None
     emulated: Mapping[str, Any] = field(default_factory=dict)
@@ -267,7 +270,9 @@ class SlamEstimate:
     """The robot pose and landmark map believed by a SLAM back end (field frame).
 
     ``pose`` (3,), ``pose_cov`` (3, 3); ``landmark_ids`` (L,) int; ``landmarks`` (L, 2);
-    ``landmark_covs`` (L, 2, 2).
+    ``landmark_covs`` (L, 2, 2): the point landmarks (poles). ``circles``: the map of a back
+    end whose landmarks are circles (columns, trunks, posts), ``(x, y, R)`` with (3, 3)
+    covariances; empty for the point back ends.
     """
 
     pose: FloatArray
@@ -275,3 +280,4 @@ class SlamEstimate:
     landmark_ids: NDArray[np.int64]
     landmarks: FloatArray
     landmark_covs: FloatArray
+    circles: tuple[MappedCircle, ...] = ()

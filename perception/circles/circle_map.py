@@ -44,6 +44,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from perception.circles.model import polar_jacobian, polar_range
+from perception.circles.scan_circles import stands_clear
 from perception.circles.segmentation import BreakpointConfig, Segment, segment_breakpoints
 from perception.estimation.gating import chi2_threshold, mahalanobis_squared
 from perception.estimation.kalman import joseph_update
@@ -239,13 +240,8 @@ class CircleMapper:
         self, segment: Segment, ranges: FloatArray, pose: FloatArray, mount_x_m: float
     ) -> _Candidate | None:
         """The segment as a candidate (module docstring, step 1), or None."""
-        jump = self.config.segmentation.jump_threshold_m
-        before, after = segment.start - 1, segment.stop
-        if before < 0 or after >= len(ranges):
-            return None  # cut by the field of view
-        for side, end in ((before, segment.ranges[0]), (after, segment.ranges[-1])):
-            if math.isfinite(ranges[side]) and ranges[side] < end + jump:
-                return None  # something nearer (or touching) beside it: maybe partly hidden
+        if not stands_clear(segment, ranges, self.config.segmentation.jump_threshold_m):
+            return None  # cut by the field of view, or maybe partly hidden
         spacing = float(np.mean(np.diff(segment.angles))) if len(segment) > 1 else 0.0
         mean_range = float(np.mean(segment.ranges))
         half_chord = 0.5 * mean_range * (float(np.ptp(segment.angles)) + spacing)

@@ -35,21 +35,32 @@ class Provider(ABC):
 class PerceptionContext:
     """What providers are built from: the robot's camera and the scene's known landmarks.
 
-    ``camera`` is the camera's intrinsics; ``codes`` (L,) the pole colour codes with their
-    landmark ids; ``pole`` the pole geometry. Expensive shared parts (the CNN) are built once
-    per context and shared by every provider that reads them (:meth:`cnn_detector`).
+    ``camera`` is the camera's intrinsics, None for a robot without one; ``codes`` (L,) the
+    pole colour codes with their landmark ids; ``pole`` the pole geometry. Expensive shared
+    parts (the CNN) are built once per context and shared by every provider that reads them
+    (:meth:`cnn_detector`).
     """
 
-    def __init__(self, camera: CameraModel, codes: Sequence[PoleCode], pole: PoleGeometry) -> None:
+    def __init__(
+        self, camera: CameraModel | None, codes: Sequence[PoleCode], pole: PoleGeometry
+    ) -> None:
         self.camera = camera
         self.codes = tuple(codes)
         self.pole = pole
         self._cnn: dict[CnnDetectorConfig, CnnPoleDetector] = {}
+
+    def require_camera(self, reader: str) -> CameraModel:
+        """The camera's intrinsics for the provider ``reader``; ValueError without a camera."""
+        if self.camera is None:
+            raise ValueError(f"{reader} reads camera images, but this robot has no camera")
+        return self.camera
 
     def cnn_detector(self, config: CnnDetectorConfig) -> CnnPoleDetector:
         """The CNN detector for ``config``, loaded on first use and then shared."""
         if config not in self._cnn:
             from perception.vision.cnn_detector import CnnPoleDetector  # loads torch
 
-            self._cnn[config] = CnnPoleDetector(config, self.camera, self.codes, self.pole)
+            self._cnn[config] = CnnPoleDetector(
+                config, self.require_camera("the CNN detector"), self.codes, self.pole
+            )
         return self._cnn[config]

@@ -71,7 +71,7 @@ class _InViewOracle(_Oracle):
 
     def __init__(self, config: OracleConfig, context: PerceptionContext) -> None:
         super().__init__(config)
-        self.half_fov_rad = math.radians(context.camera.hfov_deg) / 2
+        self.half_fov_rad = math.radians(context.require_camera("the pole oracle").hfov_deg) / 2
 
     def seen(
         self, inputs: Mapping[str, Any], points: FloatArray

@@ -56,7 +56,9 @@ class ColourPoleSightings(Provider):
     requires = ("image", "camera_state")
 
     def __init__(self, config: ColourFilterConfig, context: PerceptionContext) -> None:
-        self.detector = ColourPoleDetector(config, context.camera, context.codes, context.pole)
+        self.detector = ColourPoleDetector(
+            config, context.require_camera("the colour filter"), context.codes, context.pole
+        )
 
     def update(self, inputs: Mapping[str, Any], time_s: float) -> tuple[LandmarkObservation, ...]:
         return tuple(self.detector.detect(inputs["image"], inputs["camera_state"]))

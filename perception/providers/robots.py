@@ -51,7 +51,7 @@ class VisionOnlyRobotSightings(Provider):
     requires: ClassVar[tuple[str, ...]] = ("image", "camera_state")
 
     def __init__(self, config: RobotDetectorConfig, context: PerceptionContext) -> None:
-        self.detector = RobotDetector(config, context.camera)
+        self.detector = RobotDetector(config, context.require_camera("the robot detector"))
 
     def update(self, inputs: Mapping[str, Any], time_s: float) -> tuple[RobotSighting, ...]:
         return tuple(self.detector.detect(inputs["image"], inputs["camera_state"]))

@@ -20,6 +20,7 @@ from perception.providers.odometry import DeadReckoning
 from perception.providers.poles import ColourPoleSightings, PoleSightingHistory
 from perception.providers.slam import EkfSlamProvider
 from perception.representations import (
+    CIRCLE_MAP,
     IMAGE_DETECTIONS,
     ODOMETRY_POSE,
     POLE_LAST_SEEN,
@@ -189,7 +190,13 @@ def test_unknown_provider_name_raises_naming_the_field(field: str, value: str) -
 
 def test_registry_names_the_documented_providers() -> None:
     assert set(PROVIDERS[POLE_SIGHTINGS]) == {"cnn", "colour", "oracle"}
-    assert set(PROVIDERS[SELF_POSE]) == {"ekf_slam", "oracle"}
+    assert set(PROVIDERS[SELF_POSE]) == {"ekf_slam", "oracle", "circle_slam"}
+    assert set(PROVIDERS[CIRCLE_MAP]) == {"laser", "slam"}
+
+
+def test_the_slam_circle_map_needs_circle_slam() -> None:
+    with pytest.raises(ValueError, match=r"circle_map='slam'.*self_pose='circle_slam'"):
+        PerceptionPipeline(PipelineConfig(circle_map="slam"), context(), outputs=[CIRCLE_MAP])
 
 
 # ----- dead reckoning ----------------------------------------------------------------------------

@@ -1,0 +1,83 @@
+"""Circle-landmark EKF SLAM (:mod:`perception.slam.circle_slam`) as a self-pose provider, and
+its map as the circle map: the pose from wheel odometry and laser circles alone."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from perception.circles.scan_circles import ScanCirclesConfig, scan_circles
+from perception.providers.base import Provider
+from perception.representations import CIRCLE_MAP, SELF_POSE, Prior
+from perception.sensor_models import LaserModel
+from perception.slam.circle_slam import CircleSlam, CircleSlamConfig
+from perception.types import MappedCircle, SlamEstimate
+
+
+class CircleSlamProvider(Provider):
+    """Predicts with each frame's odometry increment, then fuses the circles of its laser scan
+    (:func:`~perception.circles.scan_circles.scan_circles`).
+
+    The estimate has no point landmarks; its map is :attr:`SlamEstimate.circles`, one
+    :class:`MappedCircle` per mapped circle (id = its place in the state, ``hits`` the
+    sightings fused into it, confirmed once in the map: ``min_views`` already held it back).
+    """
+
+    provides = SELF_POSE
+    requires = ("odometry_delta", "laser", "laser_model")
+
+    def __init__(self, config: CircleSlamConfig, scan: ScanCirclesConfig) -> None:
+        self.config = config
+        self.scan = scan
+        self._slam: CircleSlam | None = None
+        self._hits: list[int] = []
+
+    @property
+    def slam(self) -> CircleSlam:
+        """The episode's filter (after :meth:`reset`)."""
+        if self._slam is None:
+            raise RuntimeError(
+                "CircleSlamProvider.reset() must be called before reading the filter"
+            )
+        return self._slam
+
+    def reset(self, prior: Prior) -> None:
+        self._slam = CircleSlam(self.config, prior.pose)
+        self._hits = []
+
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> SlamEstimate:
+        slam = self.slam
+        slam.predict(inputs["odometry_delta"])
+        model: LaserModel = inputs["laser_model"]
+        result = slam.update(
+            scan_circles(model.beam_angles(), inputs["laser"], model.mount_x_m, self.scan)
+        )
+        self._hits += [0] * (slam.n_circles - len(self._hits))
+        for circle in np.concatenate([result.matched[:, 0], result.added[:, 0]]).tolist():
+            self._hits[circle] += 1
+        circles = tuple(
+            MappedCircle(circle_id=k, state=state, cov=cov, hits=self._hits[k], confirmed=True)
+            for k, (state, cov) in enumerate(zip(slam.circles, slam.circle_covs, strict=True))
+        )
+        return SlamEstimate(
+            pose=slam.pose,
+            pose_cov=slam.pose_cov,
+            landmark_ids=np.zeros(0, dtype=np.int64),
+            landmarks=np.zeros((0, 2)),
+            landmark_covs=np.zeros((0, 2, 2)),
+            circles=circles,
+        )
+
+
+class SlamCircleMap(Provider):
+    """The circle map of a circle-landmark self pose (``self_pose="circle_slam"``): its
+    :attr:`SlamEstimate.circles`."""
+
+    provides = CIRCLE_MAP
+    requires = (SELF_POSE,)
+
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> tuple[MappedCircle, ...]:
+        slam: SlamEstimate = inputs[SELF_POSE]
+        return slam.circles
