@@ -20,6 +20,7 @@ from spl_env.robots.nao import RobotConfig
 from spl_env.scenes.spl_field import SceneConfig
 from spl_env.sensors.rig import RigConfig
 from spl_env.tasks.base import TaskConfig
+from spl_env.tasks.episode import EpisodeConfig
 
 INFO_LEVELS = ("full", "light")
 
@@ -41,53 +42,45 @@ SPL_ALIASES: dict[str, str] = {
 
 
 @dataclass(frozen=True, kw_only=True)
-class EnvConfig:
-    """Everything an SPL env is made of; each env narrows ``task`` to its task's config.
+class CoreConfig:
+    """What every env of the core (:class:`spl_env.envs.core.RobotEnv`) has: perception, the
+    control and physics rates, the ``info`` level; each world kind adds its scene, robot and
+    sensors, each env narrows ``task`` to its task's config (an :class:`EpisodeConfig`).
 
     ``info_level``: ``"full"`` (perception, ground truth and reward terms in ``info``) or
     ``"light"`` (reward terms only, for fast training). ``info_timing`` adds the step's
     wall-clock seconds as ``info["timing"]``; off by default, because seconds measure the host,
-    not the world, and would break same-seed comparisons of ``info``. With the laser on
-    (``sensors.laser``), the observation holds the ``observed_circles`` nearest circles of the
-    circle map and ``info`` the whole map.
+    not the world, and would break same-seed comparisons of ``info``.
     """
 
-    scene: SceneConfig = field(default_factory=SceneConfig)
-    robot: RobotConfig = field(default_factory=RobotConfig)
-    sensors: RigConfig = field(default_factory=RigConfig)
     perception: PipelineConfig = field(default_factory=PipelineConfig)
-    task: TaskConfig = field(default_factory=TaskConfig)
-    control_dt_s: float = 0.1  # one control step = one camera frame (10 Hz)
-    physics_dt_s: float = 0.01  # PyBullet time step for the ball
+    task: EpisodeConfig = field(default_factory=EpisodeConfig)
+    control_dt_s: float = 0.1  # one control step = one camera frame / laser scan (10 Hz)
+    physics_dt_s: float = 0.01  # PyBullet time step (the ball)
     info_level: str = "full"
     info_timing: bool = False
-    observed_circles: int = 12  # circle-map rows of the observation (with the laser on)
 
     def __post_init__(self) -> None:
         if not (0 < self.physics_dt_s <= min(self.control_dt_s, 0.1)) or not (
             self.control_dt_s <= 1.0
         ):
             raise ValueError(
-                "EnvConfig needs 0 < physics_dt_s <= min(control_dt_s, 0.1 s) and "
+                f"{type(self).__name__} needs 0 < physics_dt_s <= min(control_dt_s, 0.1 s) and "
                 f"control_dt_s <= 1 s, got {self.physics_dt_s} and {self.control_dt_s}"
             )
         ratio = self.control_dt_s / self.physics_dt_s
         if abs(ratio - round(ratio)) > 1e-6:
             raise ValueError(
-                f"EnvConfig.control_dt_s must be a whole multiple of physics_dt_s, got {ratio:.4f}"
+                f"{type(self).__name__}.control_dt_s must be a whole multiple of physics_dt_s, "
+                f"got {ratio:.4f}"
             )
         steps = self.task.episode_s / self.control_dt_s
         if not (math.isfinite(steps) and steps >= 1 and abs(steps - round(steps)) < 1e-6):
             raise ValueError(
-                "EnvConfig.task.episode_s must be a whole number (>= 1) of control steps of "
-                f"{self.control_dt_s} s, got {self.task.episode_s}"
+                f"{type(self).__name__}.task.episode_s must be a whole number (>= 1) of control "
+                f"steps of {self.control_dt_s} s, got {self.task.episode_s}"
             )
-        if not self.scene.poles_enabled:
-            raise ValueError(
-                "EnvConfig.scene.poles_enabled must be True: the SPL envs map the poles"
-            )
-        check_choice("EnvConfig", "info_level", self.info_level, INFO_LEVELS)
-        check_int("EnvConfig", "observed_circles", self.observed_circles, 1)
+        check_choice(type(self).__name__, "info_level", self.info_level, INFO_LEVELS)
         task_class = typing.get_type_hints(type(self))["task"]
         if not isinstance(self.task, task_class):
             raise TypeError(
@@ -104,3 +97,26 @@ class EnvConfig:
     def max_steps(self) -> int:
         """Control steps per episode."""
         return round(self.task.episode_s / self.control_dt_s)
+
+
+@dataclass(frozen=True, kw_only=True)
+class EnvConfig(CoreConfig):
+    """Everything an SPL env is made of: the field, the Naos, our robot's sensors, perception
+    and the task (:class:`CoreConfig`'s fields besides). With the laser on (``sensors.laser``),
+    the observation holds the ``observed_circles`` nearest circles of the circle map and
+    ``info`` the whole map.
+    """
+
+    scene: SceneConfig = field(default_factory=SceneConfig)
+    robot: RobotConfig = field(default_factory=RobotConfig)
+    sensors: RigConfig = field(default_factory=RigConfig)
+    task: TaskConfig = field(default_factory=TaskConfig)
+    observed_circles: int = 12  # circle-map rows of the observation (with the laser on)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not self.scene.poles_enabled:
+            raise ValueError(
+                "EnvConfig.scene.poles_enabled must be True: the SPL envs map the poles"
+            )
+        check_int("EnvConfig", "observed_circles", self.observed_circles, 1)

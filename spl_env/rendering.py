@@ -1,4 +1,5 @@
-"""Pictures for people: a top-down field with truth and belief beside the camera image.
+"""Pictures for people: a top-down field with truth and belief beside the camera image, and a
+room of circular objects from above with its circle map.
 
 Colours (BGR internally, RGB out): true pose green, SLAM estimate orange with its 95 %
 covariance ellipse, odometry-only pose grey; true poles as filled discs in their colours,
@@ -8,17 +9,19 @@ estimated poles as crosses with ellipses; other robots by team colour.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
 
 from perception.geometry import FloatArray
-from perception.representations import ODOMETRY_POSE, SELF_POSE, PerceptionOutput
+from perception.representations import CIRCLE_MAP, ODOMETRY_POSE, SELF_POSE, PerceptionOutput
 from perception.types import LandmarkObservation, PoleCode, SlamEstimate
 from spl_env.field import FieldDimensions
+from spl_env.scenes.rooms import RoomLayout
 from spl_env.scenes.spl_field import POLE_BAND_RGBA
-from spl_env.world_state import WorldState
+from spl_env.world_state import RoomState, WorldState
 
 PX_PER_M = 40
 CHI2_2DOF_95 = 5.991  # 95 % quantile of chi-square with 2 dof
@@ -106,19 +109,40 @@ class TopDownView:
         return img
 
     def _robot(self, img: NDArray[np.uint8], pose: FloatArray, bgr: tuple[int, int, int]) -> None:
-        c = self.px(pose[:2])
-        tip = self.px(pose[:2] + 0.3 * np.array([math.cos(pose[2]), math.sin(pose[2])]))
-        cv2.circle(img, c, 6, bgr, 2)
-        cv2.line(img, c, tip, bgr, 2)
+        draw_robot(img, self.px, pose, bgr)
 
     def _ellipse(
         self, img: NDArray[np.uint8], xy: FloatArray, cov: FloatArray, bgr: tuple[int, int, int]
     ) -> None:
-        values, vectors = np.linalg.eigh(0.5 * (cov + cov.T))
-        axes = np.sqrt(np.clip(values, 0.0, None) * CHI2_2DOF_95) * PX_PER_M
-        angle = -math.degrees(math.atan2(vectors[1, 1], vectors[0, 1]))
-        size = (int(min(axes[1], 1e4)), int(min(axes[0], 1e4)))
-        cv2.ellipse(img, self.px(xy), size, angle, 0, 360, bgr, 1)
+        draw_ellipse(img, self.px, xy, cov, bgr)
+
+
+Pixel = Callable[[FloatArray], tuple[int, int]]  # field point (2,) -> pixel (col, row)
+
+
+def draw_robot(
+    img: NDArray[np.uint8], px: Pixel, pose: FloatArray, bgr: tuple[int, int, int]
+) -> None:
+    """A robot at ``pose`` (3,): a ring with a 0.3 m heading line."""
+    c = px(pose[:2])
+    tip = px(pose[:2] + 0.3 * np.array([math.cos(pose[2]), math.sin(pose[2])]))
+    cv2.circle(img, c, 6, bgr, 2)
+    cv2.line(img, c, tip, bgr, 2)
+
+
+def draw_ellipse(
+    img: NDArray[np.uint8],
+    px: Pixel,
+    xy: FloatArray,
+    cov: FloatArray,
+    bgr: tuple[int, int, int],
+) -> None:
+    """The 95 % ellipse of a position ``xy`` (2,) with covariance ``cov`` (2, 2) (m²)."""
+    values, vectors = np.linalg.eigh(0.5 * (cov + cov.T))
+    axes = np.sqrt(np.clip(values, 0.0, None) * CHI2_2DOF_95) * PX_PER_M
+    angle = -math.degrees(math.atan2(vectors[1, 1], vectors[0, 1]))
+    size = (int(min(axes[1], 1e4)), int(min(axes[0], 1e4)))
+    cv2.ellipse(img, px(xy), size, angle, 0, 360, bgr, 1)
 
 
 def draw_detections(
@@ -152,3 +176,46 @@ def side_by_side(
         camera_rgb, (round(camera_rgb.shape[1] * scale), rows), interpolation=cv2.INTER_NEAREST
     )
     return np.ascontiguousarray(np.hstack([cv2.cvtColor(top_down_bgr, cv2.COLOR_BGR2RGB), cam]))
+
+
+class RoomView:
+    """Draws a room of circular objects from above: walls, the objects' true outlines (grey),
+    the laser's returns (red), the mapped circles (orange, 95 % centre ellipses), the believed
+    pose (orange) and the true one (green)."""
+
+    def __init__(self, layout: RoomLayout, wall_segments: FloatArray) -> None:
+        hx, hy = layout.half_size_m
+        self.half = (hx + 0.2, hy + 0.2)
+        self.size = (round(2 * self.half[1] * PX_PER_M), round(2 * self.half[0] * PX_PER_M))
+        img = np.full((*self.size, 3), 235, np.uint8)
+        for a, b in wall_segments:
+            cv2.line(img, self.px(a), self.px(b), (60, 60, 60), 3)
+        for obj in layout.objects:
+            outline = np.array([self.px(p) for p in obj.outline()], dtype=np.int32)
+            cv2.fillPoly(img, [outline], (170, 170, 170))
+        self.background = img
+
+    def px(self, xy: FloatArray) -> tuple[int, int]:
+        """Pixel (col, row) of room point ``xy`` (2,)."""
+        return round((xy[0] + self.half[0]) * PX_PER_M), round((self.half[1] - xy[1]) * PX_PER_M)
+
+    def draw(
+        self, state: RoomState, output: PerceptionOutput, scan_points: FloatArray
+    ) -> NDArray[np.uint8]:
+        """(H, W, 3) RGB picture; ``scan_points`` (N, 2) the laser's returns (field frame, from
+        the true pose)."""
+        img = self.background.copy()
+        for point in scan_points:
+            cv2.circle(img, self.px(point), 1, (40, 40, 220), -1)
+        if CIRCLE_MAP in output:
+            for circle in output[CIRCLE_MAP]:
+                if circle.confirmed:
+                    centre, radius = circle.state[:2], circle.state[2]
+                    cv2.circle(img, self.px(centre), round(radius * PX_PER_M), SLAM_BGR, 2)
+                    draw_ellipse(img, self.px, centre, circle.cov[:2, :2], SLAM_BGR)
+        if SELF_POSE in output:
+            slam = output.get_as(SELF_POSE, SlamEstimate)
+            draw_ellipse(img, self.px, slam.pose[:2], slam.pose_cov[:2, :2], SLAM_BGR)
+            draw_robot(img, self.px, slam.pose, SLAM_BGR)
+        draw_robot(img, self.px, state.robot_pose, TRUE_BGR)
+        return np.ascontiguousarray(cv2.cvtColor(img, cv2.COLOR_BGR2RGB))

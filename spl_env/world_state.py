@@ -1,4 +1,6 @@
-"""The ground truth of one step: every robot, the ball and the landmarks (field frame, SI)."""
+"""The ground truth of one step (field frame, SI): on the SPL field every robot, the ball and the
+landmarks (:class:`WorldState`); in a room, our robot and the circular objects (:class:`RoomState`).
+"""
 
 from __future__ import annotations
 
@@ -71,4 +73,28 @@ class WorldState:
             landmarks=self.landmarks.copy(),
             robots=np.delete(self.poses, robot, axis=0)[:, :2].copy(),
             robot_teams=np.delete(self.teams, robot),
+        )
+
+
+@dataclass(frozen=True, kw_only=True)
+class RoomState:
+    """Ground truth after a step in a room of circular objects (the circle-mapping scenes).
+
+    ``robot_pose`` (3,) our differential-drive robot's ``(x, y, θ)``; ``blocked`` whether it
+    bumped into something this step; ``circles`` (K, 3) the objects' circles ``(x, y, R)``
+    (m; a flat-sided trunk's round part) named ``object_names`` (K,).
+    """
+
+    time_s: float
+    robot_pose: FloatArray
+    blocked: bool
+    circles: FloatArray
+    object_names: tuple[str, ...]
+
+    def truth_for_agent(self) -> GroundTruth:
+        """What an oracle provider of our robot may read: its pose (no point landmarks)."""
+        return GroundTruth(
+            robot_pose=self.robot_pose.copy(),
+            landmark_ids=np.zeros(0, dtype=np.int64),
+            landmarks=np.zeros((0, 2)),
         )

@@ -1,26 +1,30 @@
-"""The one step loop of every SPL env: robots, scene and task joined (panda-gym's split).
+"""The one step loop of every env, and the SPL world on it (panda-gym's robot/task/env split).
 
-:class:`SplEnv` builds the world once per env: the scene (:mod:`spl_env.scenes`), our robot and
-the scripted ones (:mod:`spl_env.robots`), our robot's sensor rig (:mod:`spl_env.sensors.rig`),
-the perception pipeline (:mod:`perception.pipeline`, the CNN loaded once) and the task's
-observation encoders. Each control step:
+:class:`RobotEnv` is the loop: each control step it checks the action, lets the world act on it,
+advances the physics, senses, runs the perception pipeline, encodes the observation and scores
+the step::
 
-    action ─► task.command ─► head, walk (collisions), kick ─► physics ─► WorldState
-    rig.sense ─► SensorFrame ─► pipeline.step ─► PerceptionOutput ─► encoders ─► observation
-    task.reward_terms(WorldState, PerceptionOutput) ─► reward, info
+    action ─► _act (the task's command for every body) ─► physics ─► _world_state (truth)
+    _sense_frame ─► SensorFrame ─► pipeline.step ─► PerceptionOutput ─► encoders ─► observation
+    task.reward_terms(truth, PerceptionOutput) ─► reward, info
 
-A new env is a task (:mod:`spl_env.tasks`) plus a subclass naming it and its config, and a
-registration; it adds no step loop of its own.
+A world kind fills in its hooks once: :class:`SplEnv` (Naos on an SPL field, the scene of
+:mod:`spl_env.scenes.spl_field`, the Nao rig) here, :class:`spl_env.envs.circles.CirclesEnv`
+(a differential-drive robot in a room of circular objects). A new env is a task
+(:mod:`spl_env.tasks`) plus a subclass naming it and its config, and a registration; it adds no
+step loop of its own.
 """
 
 from __future__ import annotations
 
 import time
+from abc import abstractmethod
 from collections.abc import Mapping
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Generic, Protocol, TypeVar
 
 import gymnasium as gym
 import numpy as np
+from gymnasium import spaces
 from numpy.typing import NDArray
 
 from perception.geometry import FloatArray, wrap_angle
@@ -28,14 +32,19 @@ from perception.pipeline import PerceptionPipeline
 from perception.providers.base import PerceptionContext
 from perception.representations import CIRCLE_MAP, POLE_SIGHTINGS, PerceptionOutput
 from perception.types import SensorFrame
-from spl_env.config import SPL_ALIASES, EnvConfig
+from spl_env.config import SPL_ALIASES, CoreConfig, EnvConfig
 from spl_env.envs.info import (
     FULL_INFO_REQUIRES,
     InfoLayout,
     ground_truth_info,
     perception_info,
 )
-from spl_env.observations.base import EncoderInput, compose_space, encode_all
+from spl_env.observations.base import (
+    EncoderInput,
+    ObservationEncoder,
+    compose_space,
+    encode_all,
+)
 from spl_env.observations.circles import CircleMapEncoder
 from spl_env.overrides import apply_overrides
 from spl_env.rendering import TopDownView, draw_detections, side_by_side
@@ -48,24 +57,58 @@ from spl_env.sim.world import BulletWorld
 from spl_env.tasks.base import Task, TaskContext
 from spl_env.world_state import WorldState
 
+StateT = TypeVar("StateT")
+
 AGENT = 0  # index of our robot among the world's robots
 
 
-class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
-    """The env core; subclasses set :attr:`task_class`, :attr:`config_class` and
-    :attr:`aliases` and carry the env's documentation.
+class EnvTask(Protocol):
+    """What the loop asks of a task (:class:`spl_env.tasks.base.Task` for the SPL envs)."""
+
+    @property
+    def action_space(self) -> spaces.Box:
+        """The action space, a ``Box``."""
+        ...
+
+    def encoders(self) -> tuple[ObservationEncoder, ...]:
+        """The observation's encoders, in key order."""
+        ...
+
+    def reward_requires(self) -> tuple[str, ...]:
+        """Representations the reward reads beyond the encoders'."""
+        ...
+
+    def reward_terms(self, state: Any, output: PerceptionOutput) -> dict[str, float]:
+        """Each reward term of this step (the reward is their sum)."""
+        ...
+
+    def terminated(self, state: Any, output: PerceptionOutput) -> bool:
+        """Whether the episode ended in a terminal state."""
+        ...
+
+
+class RobotEnv(gym.Env[dict[str, Any], np.ndarray], Generic[StateT]):
+    """The step loop; a world kind sets the hooks (``_build`` ... ``_picture``), an env sets
+    :attr:`task_class`, :attr:`config_class` and :attr:`aliases` and carries the documentation.
 
     Keyword arguments override config fields by dotted path, top-level name or alias
-    (:func:`spl_env.overrides.apply_overrides`).
+    (:func:`spl_env.overrides.apply_overrides`). ``StateT`` is the world's ground-truth type
+    (:class:`spl_env.world_state.WorldState` on the SPL field).
     """
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012
-    task_class: ClassVar[type[Task]]
-    config_class: ClassVar[type[EnvConfig]]
-    aliases: ClassVar[Mapping[str, str]] = SPL_ALIASES
+    task_class: ClassVar[type[Any]]
+    config_class: ClassVar[type[CoreConfig]]
+    aliases: ClassVar[Mapping[str, str]] = {}
+
+    # set by _build
+    task: EnvTask
+    encoders: tuple[ObservationEncoder, ...]
+    pipeline: PerceptionPipeline
+    _info_layout: InfoLayout
 
     def __init__(
-        self, config: EnvConfig | None = None, render_mode: str | None = None, **overrides: Any
+        self, config: CoreConfig | None = None, render_mode: str | None = None, **overrides: Any
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
@@ -76,11 +119,182 @@ class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
             raise TypeError(
                 f"config must be a {self.config_class.__name__}, got {type(config).__name__}"
             )
-        self.config = apply_overrides(config or self.config_class(), overrides, self.aliases)
+        self.config: Any = apply_overrides(config or self.config_class(), overrides, self.aliases)
         self.render_mode = render_mode
+        self.metadata = {**self.metadata, "render_fps": round(1.0 / self.config.control_dt_s)}
+        self.world = BulletWorld(time_step_s=self.config.physics_dt_s)
+        self._build()
+        self.observation_space = compose_space(self.encoders)
+        self._action_box = self.task.action_space
+        self.action_space = self._action_box
+        self._initial_state = self.world.save_state()
+        self._state: StateT | None = None
+        self._frame: SensorFrame | None = None
+        self._output: PerceptionOutput | None = None
+        self._time_s = 0.0
+        self._steps = 0
+        self._closed = False
+        self.step_times: dict[str, float] = {}  # wall-clock seconds of the last step's parts
+
+    # ----- the world kind's hooks ---------------------------------------------------------
+    @abstractmethod
+    def _build(self) -> None:
+        """Build the world's bodies, the task, :attr:`encoders`, :attr:`pipeline` and the
+        ``info`` layout (once per env)."""
+
+    @abstractmethod
+    def _start_episode(self, rng: np.random.Generator) -> FloatArray:
+        """Place every body, reset the sensors; return perception's believed start pose (3,)."""
+
+    @abstractmethod
+    def _act(self, action: FloatArray, state: StateT) -> None:
+        """Apply this step's commands (ours from the checked ``action``) before the physics."""
+
+    @abstractmethod
+    def _world_state(self) -> StateT:
+        """The ground truth now."""
+
+    @abstractmethod
+    def _sense_frame(self) -> tuple[SensorFrame, dict[str, float]]:
+        """Our robot's sensor frame of this step and the seconds its parts took."""
+
+    @abstractmethod
+    def _ground_truth_info(self, state: StateT) -> dict[str, Any]:
+        """``info["ground_truth"]`` (fixed shapes)."""
+
+    @abstractmethod
+    def _picture(self) -> NDArray[np.uint8]:
+        """The ``rgb_array`` frame of :meth:`render`."""
+
+    # ----- gymnasium API ------------------------------------------------------------------
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        super().reset(seed=seed)
+        rng = self.np_random
+        self.world.restore_state(self._initial_state)
+        self._time_s, self._steps = 0.0, 0
+        prior = self._start_episode(rng)
+        self.pipeline.reset(prior, rng)
+        self._state = self._world_state()
+        times = self._sense(physics_s=0.0)
+        return self._observation(), self._info(
+            self.task.reward_terms(*self._truth_and_belief()), times
+        )
+
+    def step(
+        self, action: np.ndarray
+    ) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, Any]]:
+        if self._state is None:
+            raise RuntimeError("call reset() before step()")
+        a = self._checked_action(action)
+        t0 = time.perf_counter()
+        self._act(a, self._state)
+        self.world.step(self.config.substeps)
+        self._time_s += self.config.control_dt_s
+        self._state = self._world_state()
+        times = self._sense(physics_s=time.perf_counter() - t0)
+        self._steps += 1
+        terms = self.task.reward_terms(*self._truth_and_belief())
+        terminated = self.task.terminated(*self._truth_and_belief())
+        truncated = self._steps >= self.config.max_steps
+        return (
+            self._observation(),
+            float(sum(terms.values())),
+            terminated,
+            truncated,
+            self._info(terms, times),
+        )
+
+    def render(self) -> NDArray[np.uint8] | None:
+        """``rgb_array``: (H, W, 3) uint8, the world kind's picture of this step."""
+        if self.render_mode is None:
+            gym.logger.warn("render() called with render_mode=None; pass render_mode='rgb_array'")
+            return None
+        return self._picture()
+
+    def close(self) -> None:
+        if not self._closed:
+            self.world.close()
+            self._closed = True
+
+    # ----- inspection ---------------------------------------------------------------------
+    @property
+    def sensor_frame(self) -> SensorFrame:
+        """What our robot's sensors delivered in the last step (for testing perception)."""
+        return self._current()[1]
+
+    @property
+    def perception_output(self) -> PerceptionOutput:
+        """What perception believed after the last step."""
+        return self._current()[2]
+
+    @property
+    def world_state(self) -> StateT:
+        """The ground truth after the last step."""
+        return self._current()[0]
+
+    # ----- the loop's pieces --------------------------------------------------------------
+    def _checked_action(self, action: np.ndarray) -> FloatArray:
+        """``action`` as float64, or ValueError: wrong shape, not finite, outside the space."""
+        space = self._action_box
+        a = np.asarray(action, dtype=np.float64)
+        if a.shape != space.shape:
+            raise ValueError(f"action must have shape {space.shape}, got {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"action must be finite, got {a.tolist()}")
+        low, high = space.low, space.high
+        if np.any(a < low - 1e-6) or np.any(a > high + 1e-6):
+            raise ValueError(
+                f"action must lie in [{low.min():g}, {high.max():g}], got {a.tolist()}"
+            )
+        return a
+
+    def _sense(self, physics_s: float) -> dict[str, float]:
+        """Our robot's frame and perception of it; returns the step's timings (s)."""
+        self._frame, sensed = self._sense_frame()
+        t0 = time.perf_counter()
+        self._output = self.pipeline.step(self._frame)
+        self.step_times = {"physics": physics_s, **sensed, "perception": time.perf_counter() - t0}
+        return self.step_times
+
+    def _current(self) -> tuple[StateT, SensorFrame, PerceptionOutput]:
+        """This step's truth, sensor frame and perception output."""
+        if self._state is None or self._frame is None or self._output is None:
+            raise RuntimeError("call reset() first")
+        return self._state, self._frame, self._output
+
+    def _truth_and_belief(self) -> tuple[StateT, PerceptionOutput]:
+        state, _, output = self._current()
+        return state, output
+
+    def _observation(self) -> dict[str, np.ndarray]:
+        _, frame, output = self._current()
+        return encode_all(self.encoders, EncoderInput(output=output, frame=frame))
+
+    def _info(self, terms: dict[str, float], times: Mapping[str, float]) -> dict[str, Any]:
+        state, _, output = self._current()
+        info: dict[str, Any] = {"reward_terms": terms}
+        if self.config.info_level == "full":
+            info["perception"] = perception_info(output, self._info_layout)
+            info["ground_truth"] = self._ground_truth_info(state)
+        if self.config.info_timing:
+            info["timing"] = dict(times)
+        return info
+
+
+class SplEnv(RobotEnv[WorldState]):
+    """Naos on an SPL field: the env core's SPL world; subclasses set :attr:`task_class`,
+    :attr:`config_class` and :attr:`aliases` and carry the env's documentation."""
+
+    task_class: ClassVar[type[Task]]
+    config_class: ClassVar[type[EnvConfig]]
+    aliases: ClassVar[Mapping[str, str]] = SPL_ALIASES
+    config: EnvConfig
+    task: Task
+
+    def _build(self) -> None:
         cfg = self.config
-        self.metadata = {**self.metadata, "render_fps": round(1.0 / cfg.control_dt_s)}
-        self.world = BulletWorld(time_step_s=cfg.physics_dt_s)
         self.scene = SplFieldScene(self.world, cfg.scene)
         self.robots = [NaoRobot(self.world, "self", team=0, config=cfg.robot)] + [
             NaoRobot(self.world, f"robot_{i}", team=(i + 1) % 2, config=cfg.robot)
@@ -102,9 +316,6 @@ class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
         self.encoders = self.task.encoders()
         if cfg.sensors.laser is not None:  # the laser maps circles
             self.encoders += (CircleMapEncoder(cfg.observed_circles),)
-        self.observation_space = compose_space(self.encoders)
-        self._action_box = self.task.action_space
-        self.action_space = self._action_box
         emulators = emulators_for(self.scene, self.robots, cfg.sensors, cfg.perception)
         outputs = {name for encoder in self.encoders for name in encoder.requires}
         outputs |= set(self.task.reward_requires())
@@ -142,28 +353,16 @@ class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
             max_circles=cfg.perception.circle_mapper.max_circles,
         )
         self._top_down = TopDownView(self.scene.dimensions)
-        self._initial_state = self.world.save_state()
-        self._state: WorldState | None = None
-        self._frame: SensorFrame | None = None
-        self._output: PerceptionOutput | None = None
         self._blocked = np.zeros(len(self.robots), dtype=bool)
         self._names = tuple(r.name for r in self.robots)
         self._teams = np.array([r.team for r in self.robots], dtype=np.int64)
+        self._engine_delta = np.zeros(3)  # our walk engine's increment in the last step
         self.camera_yaw_rate_rps = 0.0  # our camera's turn rate in the last step (rad/s)
-        self._time_s = 0.0
-        self._steps = 0
-        self._closed = False
-        self.step_times: dict[str, float] = {}  # wall-clock seconds of the last step's parts
 
-    # ----- gymnasium API ------------------------------------------------------------------
-    def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-        super().reset(seed=seed)
-        rng = self.np_random
-        self.world.restore_state(self._initial_state)
-        self._time_s, self._steps = 0.0, 0
+    def _start_episode(self, rng: np.random.Generator) -> FloatArray:
         self._blocked[:] = False
+        self._engine_delta = np.zeros(3)
+        self.camera_yaw_rate_rps = 0.0
         start = self.task.start_pose(rng)
         # the filter's start belief: the true start off by a draw from its own prior
         prior = start + rng.normal(0.0, self.config.perception.slam.initial_pose_std)
@@ -172,95 +371,19 @@ class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
         ball = self.task.place_scripted(rng, others, [ours])
         self.scene.place_ball(ball)
         self.rig.reset(rng)
-        self.pipeline.reset(prior, rng)
-        self._state = self._world_state()
-        self.camera_yaw_rate_rps = 0.0
-        times = self._sense(np.zeros(3), yaw_rate_rps=0.0, physics_s=0.0)
-        return self._observation(), self._info(
-            self.task.reward_terms(*self._truth_and_belief()), times
-        )
+        return prior
 
-    def step(
-        self, action: np.ndarray
-    ) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, Any]]:
-        if self._state is None:
-            raise RuntimeError("call reset() before step()")
-        a = self._checked_action(action)
-        t0 = time.perf_counter()
-        state = self._state
-        commands = [self.task.command(a, state), *self.task.scripted_commands(state)]
+    def _act(self, action: FloatArray, state: WorldState) -> None:
+        """Every robot's command in order (head, walk with collisions, kick); keeps our walk
+        engine's increment and our camera's turn rate for the sensors."""
+        commands = [self.task.command(action, state), *self.task.scripted_commands(state)]
         ours = self.robots[AGENT]
         yaw_before = ours.pose[2] + ours.head[0]
-        engine_delta = self._act(commands)
-        self.world.step(self.config.substeps)
-        self._time_s += self.config.control_dt_s
-        self._state = self._world_state()
+        self._engine_delta = self._move(commands)
         yaw_rate = float(wrap_angle(ours.pose[2] + ours.head[0] - yaw_before))
         self.camera_yaw_rate_rps = yaw_rate / self.config.control_dt_s
-        times = self._sense(
-            engine_delta, self.camera_yaw_rate_rps, physics_s=time.perf_counter() - t0
-        )
-        self._steps += 1
-        terms = self.task.reward_terms(*self._truth_and_belief())
-        terminated = self.task.terminated(*self._truth_and_belief())
-        truncated = self._steps >= self.config.max_steps
-        return (
-            self._observation(),
-            float(sum(terms.values())),
-            terminated,
-            truncated,
-            self._info(terms, times),
-        )
 
-    def render(self) -> NDArray[np.uint8] | None:
-        """``rgb_array``: (H, W, 3) uint8, the top-down field beside the camera image."""
-        if self.render_mode is None:
-            gym.logger.warn("render() called with render_mode=None; pass render_mode='rgb_array'")
-            return None
-        state, frame, output = self._current()
-        top = self._top_down.draw(state, output, self.scene.codes)
-        image = frame.image if frame.image is not None else self.rig.camera_view(self.world)[0]
-        sightings = output.get(POLE_SIGHTINGS, ())
-        return side_by_side(top, draw_detections(image, sightings))
-
-    def close(self) -> None:
-        if not self._closed:
-            self.world.close()
-            self._closed = True
-
-    # ----- inspection ---------------------------------------------------------------------
-    @property
-    def sensor_frame(self) -> SensorFrame:
-        """What our robot's sensors delivered in the last step (for testing perception)."""
-        return self._current()[1]
-
-    @property
-    def perception_output(self) -> PerceptionOutput:
-        """What perception believed after the last step."""
-        return self._current()[2]
-
-    @property
-    def world_state(self) -> WorldState:
-        """The ground truth after the last step."""
-        return self._current()[0]
-
-    # ----- pieces -------------------------------------------------------------------------
-    def _checked_action(self, action: np.ndarray) -> FloatArray:
-        """``action`` as float64, or ValueError: wrong shape, not finite, outside the space."""
-        space = self._action_box
-        a = np.asarray(action, dtype=np.float64)
-        if a.shape != space.shape:
-            raise ValueError(f"action must have shape {space.shape}, got {a.shape}")
-        if not np.all(np.isfinite(a)):
-            raise ValueError(f"action must be finite, got {a.tolist()}")
-        low, high = space.low, space.high
-        if np.any(a < low - 1e-6) or np.any(a > high + 1e-6):
-            raise ValueError(
-                f"action must lie in [{low.min():g}, {high.max():g}], got {a.tolist()}"
-            )
-        return a
-
-    def _act(self, commands: list[NaoCommand]) -> FloatArray:
+    def _move(self, commands: list[NaoCommand]) -> FloatArray:
         """Apply each robot's command in order (head, walk with collisions, kick); returns our
         walk engine's increment (3,)."""
         dt = self.config.control_dt_s
@@ -279,33 +402,21 @@ class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
                     self.scene.place_ball(ball, velocity)
         return engine_delta
 
-    def _sense(
-        self, engine_delta: FloatArray, yaw_rate_rps: float, physics_s: float
-    ) -> dict[str, float]:
-        """Our robot's frame and perception of it; returns the step's timings (s)."""
+    def _sense_frame(self) -> tuple[SensorFrame, dict[str, float]]:
         state = self._state
         assert state is not None  # set by reset() and step() before sensing
         truth = state.truth_for(AGENT) if "truth" in self.pipeline.frame_inputs else None
-        self._frame, sensed = self.rig.sense(
+        return self.rig.sense(
             self.world,
             self._time_s,
-            engine_delta,
-            yaw_rate_rps,
+            self._engine_delta,
+            self.camera_yaw_rate_rps,
             self.np_random,
             render=self._render_image,
             truth=truth,
         )
-        t0 = time.perf_counter()
-        self._output = self.pipeline.step(self._frame)
-        self.step_times = {
-            "physics": physics_s,
-            **sensed,
-            "perception": time.perf_counter() - t0,
-        }
-        return self.step_times
 
     def _world_state(self) -> WorldState:
-        """The ground truth now."""
         ball, ball_velocity = self.scene.ball_state()
         return WorldState(
             time_s=self._time_s,
@@ -323,26 +434,13 @@ class SplEnv(gym.Env[dict[str, Any], np.ndarray]):
             circles=self.scene.obstacles,
         )
 
-    def _current(self) -> tuple[WorldState, SensorFrame, PerceptionOutput]:
-        """This step's truth, sensor frame and perception output."""
-        if self._state is None or self._frame is None or self._output is None:
-            raise RuntimeError("call reset() first")
-        return self._state, self._frame, self._output
+    def _ground_truth_info(self, state: WorldState) -> dict[str, Any]:
+        return ground_truth_info(state)
 
-    def _truth_and_belief(self) -> tuple[WorldState, PerceptionOutput]:
-        state, _, output = self._current()
-        return state, output
-
-    def _observation(self) -> dict[str, np.ndarray]:
-        _, frame, output = self._current()
-        return encode_all(self.encoders, EncoderInput(output=output, frame=frame))
-
-    def _info(self, terms: dict[str, float], times: Mapping[str, float]) -> dict[str, Any]:
-        state, _, output = self._current()
-        info: dict[str, Any] = {"reward_terms": terms}
-        if self.config.info_level == "full":
-            info["perception"] = perception_info(output, self._info_layout)
-            info["ground_truth"] = ground_truth_info(state)
-        if self.config.info_timing:
-            info["timing"] = dict(times)
-        return info
+    def _picture(self) -> NDArray[np.uint8]:
+        """The top-down field beside the camera image with its pole detections."""
+        state, frame, output = self._current()
+        top = self._top_down.draw(state, output, self.scene.codes)
+        image = frame.image if frame.image is not None else self.rig.camera_view(self.world)[0]
+        sightings = output.get(POLE_SIGHTINGS, ())
+        return side_by_side(top, draw_detections(image, sightings))

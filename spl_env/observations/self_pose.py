@@ -11,8 +11,8 @@ from gymnasium import spaces
 from perception.geometry import FloatArray
 from perception.representations import SELF_POSE
 from perception.types import SlamEstimate
-from spl_env.field import FieldDimensions
 from spl_env.observations.base import EncoderInput, box, squash
+from spl_env.sim.placement import Area
 
 POSITION_LIMIT = 1.5  # normalised positions saturate here
 STD_SCALE_M = 0.5  # squashing scale of position std (m)
@@ -21,10 +21,11 @@ STD_SCALE_RAD = 0.5  # squashing scale of heading std (rad)
 
 @dataclass(frozen=True)
 class SelfPoseEncoder:
-    """``self_pose_field`` (4,): x / half carpet length, y / half carpet width (saturating at
-    ±1.5), cos θ, sin θ; ``self_pose_std`` (3,): std of x, y (m) and θ (rad) as s / (s + 0.5)."""
+    """``self_pose_field`` (4,): x / half carpet length, y / half carpet width (a room's inner
+    half length and width; saturating at ±1.5), cos θ, sin θ; ``self_pose_std`` (3,): std of
+    x, y (m) and θ (rad) as s / (s + 0.5)."""
 
-    dimensions: FieldDimensions
+    dimensions: Area
     requires: tuple[str, ...] = (SELF_POSE,)
 
     def spaces(self) -> dict[str, spaces.Box]:

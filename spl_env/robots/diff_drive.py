@@ -303,12 +303,17 @@ class WheelEncoders:
 
 
 def sonar_ring_rays(
-    config: DiffDriveConfig, robot_pose: ArrayLike, length_m: float
+    config: DiffDriveConfig,
+    robot_pose: ArrayLike,
+    length_m: float,
+    offsets_rad: ArrayLike = (0.0,),
 ) -> tuple[FloatArray, FloatArray]:
-    """Field-frame rays (starts, ends), each (S, 3) (m), along the sonar axes from their discs
-    at ``sonar_height_m``, ``length_m`` long, for the robot's (3,) field pose."""
-    positions = config.sonar_positions_m()
-    directions = config.sonar_directions_rad()
+    """Field-frame rays (starts, ends), each (S * n, 3) (m), sonar-major: from each sonar's disc
+    at ``sonar_height_m``, ``length_m`` long, along its axis turned by each of the ``offsets_rad``
+    (n,) (rad, + = left; the default: along the axis), for the robot's (3,) field pose."""
+    offsets = np.asarray(offsets_rad, dtype=np.float64).reshape(-1)
+    positions = np.repeat(config.sonar_positions_m(), len(offsets), axis=0)
+    directions = (config.sonar_directions_rad()[:, None] + offsets[None, :]).ravel()
     tips = positions + length_m * np.column_stack([np.cos(directions), np.sin(directions)])
     height = np.full((len(positions), 1), config.sonar_height_m)
     starts = np.hstack([transform_points(robot_pose, positions), height])

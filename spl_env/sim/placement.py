@@ -1,33 +1,74 @@
-"""Kinematic placement on the field: free poses, collisions, and one walking step with them.
+"""Kinematic placement: free poses, collisions, and one walking (or driving) step with them.
 
-Robots are discs of ``body_radius_m`` in plan view; posts and poles are ``(x, y, radius)``
-obstacles; the carpet's edge bounds everything.
+Robots are discs of ``body_radius_m`` in plan view; posts, poles, columns and trees are
+``(x, y, radius)`` obstacles; the area's edge (an SPL carpet, a room's walls) bounds everything.
+Any robot with a kinematic body moves this way: the Nao (:mod:`spl_env.robots.nao`) and the
+differential drive (:mod:`spl_env.robots.diff_drive`).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
 from perception.geometry import FloatArray, transform_points
-from spl_env.field import FieldDimensions
-from spl_env.robots.nao import NaoRobot
+
+
+class Area(Protocol):
+    """A rectangle centred on the origin: its outer edge ``carpet_size_m`` (length, width; m)
+    bounds every body, and poses are drawn inside ``half_length_m`` x ``half_width_m`` (m)
+    (an SPL field's lines; a room's walls)."""
+
+    @property
+    def carpet_size_m(self) -> tuple[float, float]: ...
+
+    @property
+    def half_length_m(self) -> float: ...
+
+    @property
+    def half_width_m(self) -> float: ...
+
+
+@dataclass(frozen=True)
+class RectangleArea:
+    """An :class:`Area` whose edge is where poses are drawn too: a room's inner walls (m)."""
+
+    half_length_m: float
+    half_width_m: float
+
+    @property
+    def carpet_size_m(self) -> tuple[float, float]:
+        """(length, width) (m)."""
+        return 2 * self.half_length_m, 2 * self.half_width_m
+
+
+class Mobile(Protocol):
+    """A kinematic robot: a pose (3,) it commits a step's increment to (the Nao's walk, the
+    differential drive's wheels)."""
+
+    pose: FloatArray
+
+    def walk_step(self, command: FloatArray, dt_s: float) -> FloatArray: ...
+
+    def commit_motion(self, increment: FloatArray | None) -> None: ...
+
+    def sync(self) -> None: ...
 
 
 class Placement:
-    """Collision tests and free-pose sampling among ``obstacles`` (K, 3) on a field of
-    ``dimensions``, for robots of radius ``robot_radius_m``."""
+    """Collision tests and free-pose sampling among ``obstacles`` (K, 3) in a ``dimensions``
+    area, for robots of radius ``robot_radius_m``."""
 
-    def __init__(
-        self, dimensions: FieldDimensions, obstacles: FloatArray, robot_radius_m: float
-    ) -> None:
+    def __init__(self, dimensions: Area, obstacles: FloatArray, robot_radius_m: float) -> None:
         self.dimensions = dimensions
         self.obstacles = np.asarray(obstacles, dtype=np.float64).reshape(-1, 3)
         self.robot_radius_m = robot_radius_m
 
-    def collides(self, xy: FloatArray, robots: Sequence[NaoRobot], clearance: float) -> bool:
+    def collides(self, xy: FloatArray, robots: Sequence[Mobile], clearance: float) -> bool:
         """Whether a robot at ``xy`` (2,) overlaps one of ``robots``, a post or a pole, or leaves
         the carpet, with ``clearance`` (m) to spare."""
         r = self.robot_radius_m
@@ -53,7 +94,7 @@ class Placement:
         )
 
     def free_pose(
-        self, rng: np.random.Generator, placed: Sequence[NaoRobot], margin_m: float = 0.5
+        self, rng: np.random.Generator, placed: Sequence[Mobile], margin_m: float = 0.5
     ) -> FloatArray:
         """A :meth:`random_pose` clear of the ``placed`` robots (by 0.3 m), posts and poles."""
         for _ in range(200):
@@ -63,7 +104,7 @@ class Placement:
         raise RuntimeError("could not place a robot: the field is too crowded")
 
     def walk(
-        self, robot: NaoRobot, command: FloatArray, dt_s: float, others: Sequence[NaoRobot]
+        self, robot: Mobile, command: FloatArray, dt_s: float, others: Sequence[Mobile]
     ) -> tuple[FloatArray, bool]:
         """Walk ``robot`` one control step: the walk engine's increment (3,) and whether the
         body was blocked.

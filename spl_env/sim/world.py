@@ -14,6 +14,7 @@ import pybullet as p
 from numpy.typing import NDArray
 
 from perception.geometry import FloatArray
+from perception.validation import check_finite, check_positive, finite_points, finite_vector
 
 MAX_PARTS_PER_BODY = 16  # PyBullet's shape arrays crash beyond 16 shapes
 
@@ -209,6 +210,77 @@ class BulletWorld:
             )
         )
 
+    def add_static_prism(
+        self,
+        name: str,
+        polygon: FloatArray,
+        height_m: float,
+        rgba: Sequence[float],
+        base_z_m: float = 0.0,
+    ) -> int:
+        """A fixed vertical prism over ``polygon``, as a static concave triangle mesh.
+
+        ``polygon`` (N, 2), N >= 3, is a simple plan-view outline in the world frame (m), convex
+        or concave, either winding; the prism stands from ``base_z_m`` to ``base_z_m +
+        height_m``. Its side faces and two caps become one triangle mesh (vertices and indices)
+        for both collision and visual shapes, mass 0: rays hit the faces themselves, with no
+        collision margin. Collinear vertices are dropped; a self-intersecting outline raises.
+        """
+        outline = finite_points(polygon, "polygon", 3)
+        check_positive("", "height_m", height_m)
+        check_finite("", "base_z_m", base_z_m)
+        colour = finite_vector(rgba, "rgba", 4)
+        outline = _simple_ccw_polygon(outline)
+        n = len(outline)
+        caps = _ear_clip(outline)  # (n - 2, 3) counter-clockwise seen from above
+        bottom = np.column_stack([outline, np.zeros(n)])
+        top = np.column_stack([outline, np.full(n, float(height_m))])
+        # collision: 2n shared vertices, bottom ring then top ring; faces wound outwards
+        i = np.arange(n)
+        j = (i + 1) % n
+        sides = np.concatenate([np.column_stack([i, j, n + j]), np.column_stack([i, n + j, n + i])])
+        col_indices = np.concatenate([sides, caps + n, caps[:, ::-1]])
+        col = p.createCollisionShape(
+            p.GEOM_MESH,
+            vertices=np.concatenate([bottom, top]).tolist(),
+            indices=col_indices.ravel().tolist(),
+            physicsClientId=self.client,
+        )
+        # visual: each side face has its own four vertices, so that its normal is flat
+        edge = outline[j] - outline[i]
+        side_normals = np.column_stack([edge[:, 1], -edge[:, 0], np.zeros(n)])
+        side_normals /= np.linalg.norm(side_normals, axis=1, keepdims=True)
+        quads = np.stack([bottom[i], bottom[j], top[j], top[i]], axis=1).reshape(-1, 3)
+        base = 4 * i[:, None]
+        quad_faces = np.concatenate([base + np.array([0, 1, 2]), base + np.array([0, 2, 3])])
+        vertices = np.concatenate([quads, top, bottom])
+        normals = np.concatenate(
+            [
+                np.repeat(side_normals, 4, axis=0),
+                np.tile([0.0, 0.0, 1.0], (n, 1)),
+                np.tile([0.0, 0.0, -1.0], (n, 1)),
+            ]
+        )
+        vis_indices = np.concatenate([quad_faces, caps + 4 * n, caps[:, ::-1] + 5 * n])
+        vis = p.createVisualShape(
+            p.GEOM_MESH,
+            vertices=vertices.tolist(),
+            indices=vis_indices.ravel().tolist(),
+            normals=normals.tolist(),
+            rgbaColor=colour.tolist(),
+            physicsClientId=self.client,
+        )
+        if col < 0 or vis < 0:
+            raise RuntimeError(f"PyBullet could not create the prism {name!r}")
+        body_id = p.createMultiBody(
+            baseMass=0.0,
+            baseCollisionShapeIndex=col,
+            baseVisualShapeIndex=vis,
+            basePosition=[0.0, 0.0, float(base_z_m)],
+            physicsClientId=self.client,
+        )
+        return self._register(name, body_id)
+
     def set_texture(self, name: str, texture_path: str) -> None:
         """Paint ``texture_path`` (PNG) on body ``name``'s base visual."""
         tex = p.loadTexture(texture_path, physicsClientId=self.client)
@@ -320,6 +392,67 @@ class BulletWorld:
         if self._client is not None:
             p.disconnect(physicsClientId=self._client)
             self._client = None
+
+
+def _simple_ccw_polygon(points: FloatArray) -> FloatArray:
+    """``points`` (N, 2) without collinear vertices, counter-clockwise; raises unless simple."""
+    prev, nxt = np.roll(points, 1, axis=0), np.roll(points, -1, axis=0)
+    turn = _cross(points - prev, nxt - points)
+    scale = float(np.abs(points).max()) + 1.0
+    points = points[np.abs(turn) > 1e-12 * scale**2]
+    area = 0.5 * float(_cross(points, np.roll(points, -1, axis=0)).sum()) if len(points) else 0.0
+    if len(points) < 3 or area == 0.0:
+        raise ValueError(
+            f"polygon must be simple and enclose an area, got {len(points)} non-collinear vertices"
+        )
+    points = points if area > 0 else points[::-1]
+    a, b = points, np.roll(points, -1, axis=0)
+    n = len(points)
+    for k in range(n):  # every edge against every later edge that does not share a vertex
+        others = np.arange(k + 2, n if k > 0 else n - 1)
+        if len(others) and _segments_cross(a[k], b[k], a[others], b[others]).any():
+            raise ValueError(f"polygon must be simple, but its edge {k} crosses another edge")
+    return np.ascontiguousarray(points)
+
+
+def _cross(u: FloatArray, v: FloatArray) -> FloatArray:
+    """z component of the cross products of 2-D vectors (..., 2) x (..., 2)."""
+    return np.asarray(u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0])
+
+
+def _segments_cross(a: FloatArray, b: FloatArray, c: FloatArray, d: FloatArray) -> FloatArray:
+    """Whether segment a-b (2,) meets each segment c-d (M, 2), touching included: (M,) bool."""
+    d1, d2 = _cross(b - a, c - a), _cross(b - a, d - a)
+    d3, d4 = _cross(d - c, a - c), _cross(d - c, b - c)
+    return np.asarray((d1 * d2 <= 0.0) & (d3 * d4 <= 0.0))
+
+
+def _ear_clip(points: FloatArray) -> NDArray[np.int64]:
+    """Triangles (N - 2, 3) of vertex indices covering the simple counter-clockwise polygon
+    ``points`` (N, 2), each counter-clockwise (ear clipping)."""
+    remaining = list(range(len(points)))
+    triangles = []
+    while len(remaining) > 3:
+        m = len(remaining)
+        for k in range(m):
+            i0, i1, i2 = remaining[k - 1], remaining[k], remaining[(k + 1) % m]
+            a, b, c = points[i0], points[i1], points[i2]
+            if _cross(b - a, c - b) <= 0.0:  # a reflex corner is no ear
+                continue
+            rest = points[[r for r in remaining if r not in (i0, i1, i2)]]
+            inside = (
+                (_cross(b - a, rest - a) >= 0.0)
+                & (_cross(c - b, rest - b) >= 0.0)
+                & (_cross(a - c, rest - c) >= 0.0)
+            )
+            if not inside.any():
+                triangles.append((i0, i1, i2))
+                del remaining[k]
+                break
+        else:
+            raise ValueError("polygon must be simple, but it has no ear left to clip")
+    triangles.append((remaining[0], remaining[1], remaining[2]))
+    return np.asarray(triangles, dtype=np.int64)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -17,27 +17,27 @@ from gymnasium import spaces
 
 from perception.geometry import FloatArray
 from perception.representations import PerceptionOutput
-from perception.validation import check_int, check_positive
+from perception.validation import check_int
 from spl_env.behaviours import WalkerConfig, WanderingRobots
 from spl_env.field import FieldDimensions
 from spl_env.observations.base import ObservationEncoder
 from spl_env.robots.nao import NaoCommand, NaoRobot, RobotConfig
 from spl_env.sim.placement import Placement
+from spl_env.tasks.episode import EpisodeConfig
 from spl_env.world_state import WorldState
 
 MAX_OTHER_ROBOTS = 9  # scripted robots that may share the field with ours
 
 
 @dataclass(frozen=True, kw_only=True)
-class TaskConfig:
+class TaskConfig(EpisodeConfig):
     """What every SPL task has: the episode length and the scripted robots walking about."""
 
-    episode_s: float = 60.0  # episode length (s); truncation after episode_s / control_dt_s
     n_other_robots: int = 4  # scripted robots walking to random waypoints (occluders)
     other_walker: WalkerConfig = field(default_factory=WalkerConfig)
 
     def __post_init__(self) -> None:
-        check_positive("TaskConfig", "episode_s", self.episode_s)
+        super().__post_init__()
         check_int("TaskConfig", "n_other_robots", self.n_other_robots)
         if not 0 <= self.n_other_robots <= MAX_OTHER_ROBOTS:
             raise ValueError(

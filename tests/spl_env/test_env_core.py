@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import spl_env  # noqa: F401  (registers the ids)
-from spl_env import ENV_IDS
+from spl_env import SPL_ENV_IDS as ENV_IDS
 from spl_env.envs.active_vision import ActiveVisionEnv
 from spl_env.envs.core import SplEnv
 from spl_env.envs.look_around import LookAroundEnv

@@ -14,7 +14,13 @@ import pytest
 import spl_env  # noqa: F401  (registers the ids)
 from spl_env import ENV_IDS
 
-FAST: dict[str, Any] = {"camera_mode": "geometric", "frontend": "colour", "episode_s": 1.0}
+SPL_FAST: dict[str, Any] = {"camera_mode": "geometric", "frontend": "colour", "episode_s": 1.0}
+
+
+def fast(env_id: str) -> dict[str, Any]:
+    """Short episodes; the SPL envs in the geometric camera mode."""
+    return SPL_FAST if env_id.startswith("SPL/") else {"episode_s": 1.0}
+
 N_ENVS = 2
 STEPS = 12  # one episode is 10 steps: the vector envs reset a sub-env on the way
 
@@ -34,7 +40,7 @@ def stacked_layout(info: dict[str, Any]) -> dict[str, tuple[int, ...]]:
 
 def single_layout(env_id: str, **kwargs: Any) -> dict[str, tuple[int, ...]]:
     """Shapes of one env's info at reset, with a leading axis of N_ENVS."""
-    env = gym.make(env_id, **FAST, **kwargs)
+    env = gym.make(env_id, **fast(env_id), **kwargs)
     _, info = env.reset(seed=0)
     env.close()
 
@@ -60,11 +66,11 @@ def test_gymnasium_make_vec(env_id: str, mode: str, info_level: str) -> None:
         vectorization_mode=mode,
         vector_kwargs={"copy": True},
         info_level=info_level,
-        **FAST,
+        **fast(env_id),
     )
     try:
         expected = single_layout(env_id, info_level=info_level)
-        assert (info_level == "full") == ("perception.sightings" in expected)
+        assert (info_level == "full") == ("perception.pose" in expected)
         envs.action_space.seed(0)
         obs, info = envs.reset(seed=[1, 2])
         assert envs.observation_space.contains(obs)
@@ -121,7 +127,7 @@ def test_make_vec_runs_v1_for_200_steps(mode: str) -> None:
 
 
 def make_fns(env_id: str) -> list[Callable[[], gym.Env]]:
-    return [lambda: gym.make(env_id, **FAST) for _ in range(N_ENVS)]
+    return [lambda: gym.make(env_id, **fast(env_id)) for _ in range(N_ENVS)]
 
 
 @pytest.mark.parametrize("vec", ["dummy", "subproc"])
@@ -148,7 +154,7 @@ def test_stable_baselines3_vec_envs(env_id: str, vec: str) -> None:
             assert len(infos) == N_ENVS
             for k, info in enumerate(infos):
                 assert rewards[k] == pytest.approx(sum(info["reward_terms"].values()))
-                assert info["perception"]["sightings"].shape[1] == 2
+                assert info["perception"]["pose"].shape == (3,)
                 if dones[k]:
                     dones_seen += 1
                     assert info["TimeLimit.truncated"]
