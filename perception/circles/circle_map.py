@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from perception.circles.model import polar_jacobian, polar_range
+from perception.circles.model import measure_arc
 from perception.circles.scan_circles import stands_clear
 from perception.circles.segmentation import BreakpointConfig, Segment, segment_breakpoints
 from perception.estimation.gating import chi2_threshold, mahalanobis_squared
@@ -59,9 +59,6 @@ from perception.validation import (
 )
 
 _OWNER = "CircleMapConfig"
-# beams whose sqrt(R^2 - rho^2 sin^2) is below this fraction of R (within about 2 % of the
-# chord of a tangent) are left out of an update: the range's slope there is unbounded
-_TANGENT_ROOT = 0.2
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -175,7 +172,7 @@ class CircleMapper:
         believed ``pose`` (3,) (field frame) with covariance ``pose_cov`` (3, 3). Returns
         :attr:`circles`."""
         pose = finite_vector(pose, "pose", 3)
-        pose_cov = check_covariance(pose_cov, "pose_cov", 3)
+        pose_cov = check_covariance(pose_cov, "pose_cov", 3, singular_ok=True)
         scan = np.asarray(ranges, dtype=np.float64)
         updated: set[int] = set()
         for segment in segment_breakpoints(angles, ranges, self.config.segmentation):
@@ -329,36 +326,17 @@ class CircleMapper:
         circle.hits += 1
         return True
 
+    @staticmethod
     def _measurement(
-        self, x: FloatArray, candidate: _Candidate, pose: FloatArray
+        x: FloatArray, candidate: _Candidate, pose: FloatArray
     ) -> tuple[NDArray[np.bool_], FloatArray, FloatArray, FloatArray] | None:
-        """The beams ``used`` (n,) bool: those that meet the circle ``x`` away from its tangents
-        (where the range's slope is unbounded); their predicted ranges ``h`` (k,), ``H`` (k, 3)
-        on (cx, cy, R) and ``J_pose`` (k, 3) on the pose (x, y, theta). None when fewer than
-        three beams are used."""
-        offset = x[:2] - candidate.origin
-        rho = float(np.hypot(*offset))
-        phi = math.atan2(offset[1], offset[0])
-        radius = float(x[2])
-        if not 0.0 < radius < rho:
+        """The beams ``used`` (n,) bool (:func:`~perception.circles.model.measure_arc`), their
+        predicted ranges ``h`` (k,), ``H`` (k, 3) on (cx, cy, R) and ``J_pose`` (k, 3) on the
+        pose (x, y, theta); None when fewer than three beams are used."""
+        arc = measure_arc(x, pose[:2], candidate.origin, candidate.beta)
+        if arc is None:
             return None
-        h = polar_range(candidate.beta, rho, phi, radius)
-        root = rho * np.cos(candidate.beta - phi) - h  # sqrt(R^2 - rho^2 sin^2), NaN: missed
-        used = np.isfinite(h) & (root >= _TANGENT_ROOT * radius)
-        if used.sum() < 3:
-            return None
-        d = polar_jacobian(candidate.beta[used], rho, phi, radius)  # on (rho, phi, R)
-        d_rho_dc = offset / rho
-        d_phi_dc = np.array([-offset[1], offset[0]]) / rho**2
-        d_dc = np.outer(d[:, 0], d_rho_dc) + np.outer(d[:, 1], d_phi_dc)  # (k, 2)
-        H = np.column_stack([d_dc, d[:, 2]])
-        # moving the sensor by e moves the circle by -e; turning the robot turns every beam
-        # (h depends on beta - phi) and swings the sensor about the robot origin
-        mount = candidate.origin - pose[:2]
-        swing = np.array([-mount[1], mount[0]])
-        d_theta = -d[:, 1] - d_dc @ swing
-        J_pose = np.column_stack([-d_dc, d_theta])
-        return used, h[used], H, J_pose
+        return arc.used, arc.ranges, arc.H_circle, arc.H_pose
 
     @staticmethod
     def _valid(x: FloatArray, origin: FloatArray) -> bool:

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from perception.geometry import FloatArray, wrap_angle
 from perception.validation import check_choice, check_finite, check_positive
@@ -112,3 +112,62 @@ def polar_jacobian(
     jac = np.column_stack([d_rho, d_theta, d_R])
     jac[c <= 0.0] = np.nan
     return jac
+
+
+# beams whose sqrt(R^2 - rho^2 sin^2) is below this fraction of R (within about 2 % of the
+# chord of a tangent) are left out of a range measurement: the range's slope there is unbounded
+TANGENT_ROOT = 0.2
+
+
+@dataclass(frozen=True, eq=False)
+class ArcMeasurement:
+    """The ranges a circle predicts for the beams of a scan segment, and their Jacobians.
+
+    ``used`` (n,) bool: the beams that meet the circle away from its tangents (at least
+    :data:`TANGENT_ROOT` of ``R`` inside them); ``ranges`` (k,) (m) their predicted ranges
+    (eq. 3.2, convex side); ``H_circle`` (k, 3) their derivatives in the circle ``(c_x, c_y,
+    R)`` and ``H_pose`` (k, 3) in the robot pose ``(x, y, theta)`` (all in one world frame).
+    """
+
+    used: NDArray[np.bool_]
+    ranges: FloatArray
+    H_circle: FloatArray
+    H_pose: FloatArray
+
+
+def measure_arc(
+    circle: ArrayLike, robot_xy: ArrayLike, origin: ArrayLike, beta: ArrayLike
+) -> ArcMeasurement | None:
+    """The :class:`ArcMeasurement` of ``circle`` (3,) ``(c_x, c_y, R)`` (m, world frame) for
+    beams leaving the scanner at ``origin`` (2,) (m, world) along the world directions ``beta``
+    (n,) (rad), the scanner mounted on a robot whose origin is at ``robot_xy`` (2,) (m, world):
+    turning the robot turns every beam and swings the scanner about the robot origin.
+
+    None when the circle holds the scanner (``R >= rho``), has ``R <= 0``, or fewer than three
+    beams are used.
+    """
+    cx, cy, radius = np.asarray(circle, dtype=np.float64)
+    o = np.asarray(origin, dtype=np.float64)
+    beams = np.asarray(beta, dtype=np.float64)
+    offset = np.array([cx, cy]) - o
+    rho = float(np.hypot(*offset))
+    if not 0.0 < radius < rho:
+        return None
+    phi = float(np.arctan2(offset[1], offset[0]))
+    h = polar_range(beams, rho, phi, radius)
+    root = rho * np.cos(beams - phi) - h  # sqrt(R^2 - rho^2 sin^2), NaN where the beam misses
+    used = np.isfinite(h) & (root >= TANGENT_ROOT * radius)
+    if used.sum() < 3:
+        return None
+    d = polar_jacobian(beams[used], rho, phi, radius)  # on (rho, phi, R)
+    across = np.array([-offset[1], offset[0]]) / rho**2  # d phi / d c
+    d_dc = np.outer(d[:, 0], offset / rho) + np.outer(d[:, 1], across)
+    mount = o - np.asarray(robot_xy, dtype=np.float64)
+    # moving the robot by e moves the circle by -e relative to the scanner
+    d_theta = -d[:, 1] - d_dc @ np.array([-mount[1], mount[0]])
+    return ArcMeasurement(
+        used=used,
+        ranges=h[used],
+        H_circle=np.column_stack([d_dc, d[:, 2]]),
+        H_pose=np.column_stack([-d_dc, d_theta]),
+    )

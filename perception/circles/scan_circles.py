@@ -1,12 +1,16 @@
 """The circles of one laser scan, as observations for circle SLAM (seed 001 §5.4.3-5.4.4).
 
 Per scan: breakpoint segmentation (:func:`~perception.circles.segmentation.segment_breakpoints`);
-each segment that stands clear of its surroundings (:func:`stands_clear`) is classified
-(:func:`~perception.circles.classification.classify_segment`), and a circle segment's
-geometric fit becomes a :class:`~perception.slam.circle_slam.CircleObservation` in the robot
-frame. Its covariance is the KCR bound of the fit's points (:func:`kcr_covariance` at the
-range noise) times ``covariance_scale``: the bound holds for unbiased fits of isotropic noise,
-while a short arc's fit is biased towards a smaller radius and laser noise lies along the beams.
+each segment that stands clear of its surroundings (:func:`stands_clear`) becomes a
+:class:`~perception.slam.circle_slam.ArcObservation` (its beams, which the SLAM fuses by their
+ranges into a mapped circle they meet) and is classified
+(:func:`~perception.circles.classification.classify_segment`): a circle segment's geometric
+fit becomes the arc's :class:`~perception.slam.circle_slam.CircleObservation` in the robot
+frame, what may start a new circle. Its covariance is the KCR bound of the fit's points
+(:func:`kcr_covariance` at the range noise) times ``covariance_scale``: the bound holds for
+unbiased fits of isotropic noise, while a short arc's fit is biased towards a smaller radius
+(and kept only when it looks curved enough not to be a line) and laser noise lies along the
+beams. The ranges themselves carry no such bias, hence the arcs.
 """
 
 from __future__ import annotations
@@ -21,7 +25,7 @@ from perception.circles.classification import ClassificationConfig, classify_seg
 from perception.circles.fits import angles_around_centre, kcr_covariance
 from perception.circles.segmentation import BreakpointConfig, Segment, segment_breakpoints
 from perception.geometry import FloatArray
-from perception.slam.circle_slam import CircleObservation
+from perception.slam.circle_slam import ArcObservation, CircleObservation
 from perception.validation import InvalidTypeError, check_positive
 
 
@@ -68,31 +72,43 @@ class ScanCirclesConfig:
         check_positive("ScanCirclesConfig", "covariance_scale", self.covariance_scale)
 
 
-def scan_circles(
+def scan_arcs(
     angles: ArrayLike, ranges: ArrayLike, mount_x_m: float, config: ScanCirclesConfig
-) -> tuple[CircleObservation, ...]:
-    """The circles of one scan, in scan order: beam ``angles`` (B,) (rad, robot frame) and
-    ``ranges`` (B,) (m, NaN for no return) from a scanner ``mount_x_m`` (m) ahead of the robot
-    origin; each observation's centre is in the robot frame."""
+) -> tuple[ArcObservation, ...]:
+    """The segments of one scan that may be circles, in scan order: beam ``angles`` (B,) (rad,
+    robot frame) and ``ranges`` (B,) (m, NaN for no return) from a scanner ``mount_x_m`` (m)
+    ahead of the robot origin. Every segment that stands clear is an arc; its ``fit`` is its
+    circle (centre in the robot frame) when it is classified as one and does not hold the
+    sensor; it is ``circular`` when classified as a circle or a line (not "other")."""
     scan = np.asarray(ranges, dtype=np.float64)
+    beam_angles = np.asarray(angles, dtype=np.float64)
     jump = config.segmentation.jump_threshold_m
     sigma = config.classification.sigma_m
     found = []
-    for segment in segment_breakpoints(angles, scan, config.segmentation):
+    for segment in segment_breakpoints(beam_angles, scan, config.segmentation):
         if not stands_clear(segment, scan, jump):
             continue
         model = classify_segment(segment, config.classification)
-        if model.kind != "circle" or model.circle is None:
-            continue
-        fit = model.circle  # the geometric fit
-        if float(np.hypot(*fit.centre)) <= fit.R:
-            continue  # the sensor inside the circle: not an object seen from outside
-        cov = kcr_covariance(angles_around_centre(model.points, fit.centre), sigma)
-        found.append(
-            CircleObservation(
+        fit = model.circle if model.kind == "circle" else None  # the geometric fit
+        observation = None
+        if fit is not None and float(np.hypot(*fit.centre)) > fit.R:
+            # (a fit holding the sensor is no object seen from outside)
+            cov = kcr_covariance(angles_around_centre(model.points, fit.centre), sigma)
+            observation = CircleObservation(
                 centre=fit.centre + np.array([mount_x_m, 0.0]),
                 R=fit.R,
                 cov=config.covariance_scale * cov,
             )
-        )
+        circular = model.kind != "other"
+        found.append(ArcObservation(segment.angles, segment.ranges, observation, circular))
     return tuple(found)
+
+
+def scan_circles(
+    angles: ArrayLike, ranges: ArrayLike, mount_x_m: float, config: ScanCirclesConfig
+) -> tuple[CircleObservation, ...]:
+    """The circle fits of :func:`scan_arcs`, in scan order: each observation's centre is in the
+    robot frame."""
+    return tuple(
+        arc.fit for arc in scan_arcs(angles, ranges, mount_x_m, config) if arc.fit is not None
+    )

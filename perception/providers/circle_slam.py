@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from perception.circles.scan_circles import ScanCirclesConfig, scan_circles
+from perception.circles.scan_circles import ScanCirclesConfig, scan_arcs
 from perception.providers.base import Provider
 from perception.representations import CIRCLE_MAP, SELF_POSE, Prior
 from perception.sensor_models import LaserModel
@@ -17,12 +17,13 @@ from perception.types import MappedCircle, SlamEstimate
 
 
 class CircleSlamProvider(Provider):
-    """Predicts with each frame's odometry increment, then fuses the circles of its laser scan
-    (:func:`~perception.circles.scan_circles.scan_circles`).
+    """Predicts with each frame's odometry increment, then fuses the segments of its laser scan
+    (:func:`~perception.circles.scan_circles.scan_arcs`) by their ranges, or their circle fits
+    (:meth:`~perception.slam.circle_slam.CircleSlam.update_scan`).
 
     The estimate has no point landmarks; its map is :attr:`SlamEstimate.circles`, one
-    :class:`MappedCircle` per mapped circle (id = its place in the state, ``hits`` the
-    sightings fused into it, confirmed once in the map: ``min_views`` already held it back).
+    :class:`MappedCircle` per mapped circle (id :attr:`CircleSlam.circle_ids`, ``hits`` the
+    sightings fused into it, ``confirmed`` as :attr:`CircleSlam.confirmed`).
     """
 
     provides = SELF_POSE
@@ -32,7 +33,6 @@ class CircleSlamProvider(Provider):
         self.config = config
         self.scan = scan
         self._slam: CircleSlam | None = None
-        self._hits: list[int] = []
 
     @property
     def slam(self) -> CircleSlam:
@@ -45,21 +45,23 @@ class CircleSlamProvider(Provider):
 
     def reset(self, prior: Prior) -> None:
         self._slam = CircleSlam(self.config, prior.pose)
-        self._hits = []
 
     def update(self, inputs: Mapping[str, Any], time_s: float) -> SlamEstimate:
         slam = self.slam
         slam.predict(inputs["odometry_delta"])
         model: LaserModel = inputs["laser_model"]
-        result = slam.update(
-            scan_circles(model.beam_angles(), inputs["laser"], model.mount_x_m, self.scan)
-        )
-        self._hits += [0] * (slam.n_circles - len(self._hits))
-        for circle in np.concatenate([result.matched[:, 0], result.added[:, 0]]).tolist():
-            self._hits[circle] += 1
+        arcs = scan_arcs(model.beam_angles(), inputs["laser"], model.mount_x_m, self.scan)
+        slam.update_scan(arcs, model.mount_x_m, model.range_noise_std_m)
         circles = tuple(
-            MappedCircle(circle_id=k, state=state, cov=cov, hits=self._hits[k], confirmed=True)
-            for k, (state, cov) in enumerate(zip(slam.circles, slam.circle_covs, strict=True))
+            MappedCircle(circle_id=int(k), state=state, cov=cov, hits=int(n), confirmed=bool(ok))
+            for k, state, cov, n, ok in zip(
+                slam.circle_ids,
+                slam.circles,
+                slam.circle_covs,
+                slam.hits,
+                slam.confirmed,
+                strict=True,
+            )
         )
         return SlamEstimate(
             pose=slam.pose,

@@ -59,7 +59,27 @@ One :meth:`CircleSlam.update` with the observations of a scan:
    nearest neighbour of world-frame centres within ``min_views_radius_m`` of the mean of its
    earlier sightings (else it starts one); the n-th sighting adds the circle, initialised from
    that latest sighting alone. A tentative circle unseen for ``min_views_max_age`` updates is
-   forgotten, so spurious circles never reach the map nor pile up.
+   forgotten, so spurious circles never reach the map nor pile up. With ``admission =
+   "provisional"`` a new circle enters the state at its first sighting instead, *provisional*
+   until its ``min_views``-th (:attr:`CircleSlam.confirmed`), and one unseen for
+   ``min_views_max_age`` updates before that is removed from the state (marginalised: its rows
+   and columns dropped, exact for a Gaussian). The map is then anchored at the pose of each
+   circle's first sighting, not of its n-th, when dead reckoning has drifted further.
+
+Ranges (:meth:`CircleSlam.update_scan`): a scan may instead be given as its segments
+(:class:`ArcObservation`), each fused by its beams' ranges against seed 001's polar model of a
+mapped circle (eq. 3.2, convex side, :func:`perception.circles.model.measure_arc`: ``z`` the k
+ranges of the beams that meet the circle away from its tangents, ``H`` (k, 6) on the pose and
+the circle, ``Q = sigma_r^2 I``). An arc pairs with a circle by global nearest neighbour on its
+normalised innovation squared over the chi-square (k dof) quantile of ``gate_probability`` (in
+the gate: <= 1) and is fused by an iterated EKF (Gauss-Newton re-linearisation on the beams
+chosen at the prior). Only arcs that some circle explains within the range noise
+(``ArcObservation.circular``, the classification's test) pair by their ranges: the flat face of
+a trunk cut by a chord, with its rounded ends, is explained by neither a line nor a circle.
+Ranges carry no fit's bias: a circle fit of a short arc is pulled towards a smaller radius, and
+one is only made when the arc looks curved enough not to be a line, a selection that pulls the
+same way. Arcs that pair with no circle go through steps 1-4 by their circle fit, when they
+have one.
 
 Consistency (tests/perception/test_circle_slam.py, 30 Monte Carlo laps among 4 columns): the
 pose NEES stays in its 95 % chi-square band; the map NEES does at a quarter of the default
@@ -70,20 +90,24 @@ odometry noise but not at the default, where the linearisation in the heading ma
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
-from functools import cached_property
+from dataclasses import dataclass, field
+from functools import cached_property, lru_cache
+from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from perception.circles.model import measure_arc
 from perception.estimation.association import global_nearest_neighbour, mahalanobis_cost_matrix
-from perception.estimation.gating import chi2_threshold
+from perception.estimation.gating import chi2_threshold, mahalanobis_squared
 from perception.estimation.kalman import innovation_covariance, joseph_update
 from perception.geometry import FloatArray, wrap_angle
 from perception.slam.ekf_slam import EkfSlamConfig, motion
 from perception.validation import (
     InvalidTypeError,
+    check_choice,
     check_covariance,
+    check_finite,
     check_int,
     check_positive,
     check_probability,
@@ -92,10 +116,13 @@ from perception.validation import (
 )
 
 IntArray = NDArray[np.intp]
+Admission = Literal["buffered", "provisional"]
+ADMISSIONS: tuple[Admission, ...] = ("buffered", "provisional")
 
 _POSE = 3  # entries of the pose in the state
 _CIRCLE = 3  # entries of a circle in the state: (c_x, c_y, R)
 _DOF = 3  # dimension of a circle observation, for the chi-square gates
+_ARC_ITERATIONS = 3  # Gauss-Newton re-linearisations of a range (arc) update
 _ODOMETRY_FIELDS = (
     "translation_noise_m_per_sqrt_m",
     "translation_noise_m_per_sqrt_rad",
@@ -126,6 +153,9 @@ class CircleSlamConfig:
       ``min_views_max_age`` (>= 1): a tentative circle unseen for this many updates is dropped.
     - ``radius_bounds_m`` (m): ``(low, high)``, ``0 < low < high``: the radii an observation
       may report and the map may hold (module docstring, R > 0 by refusal).
+    - ``admission``: ``"buffered"`` (default: sightings wait outside the state until the
+      ``min_views``-th) or ``"provisional"`` (new circles enter the state at once and leave it
+      unless confirmed in time; module docstring, step 4).
     """
 
     translation_noise_m_per_sqrt_m: float = 0.05  # std of each of dx, dy per sqrt(m driven)
@@ -139,6 +169,7 @@ class CircleSlamConfig:
     min_views_radius_m: float = 0.2  # m: "about the same place" for min_views
     min_views_max_age: int = 10  # updates: a tentative circle unseen this long is forgotten
     radius_bounds_m: tuple[float, float] = (0.01, 2.0)  # m: columns and trunks
+    admission: Admission = "buffered"
 
     def __post_init__(self) -> None:
         owner = "CircleSlamConfig"
@@ -156,6 +187,7 @@ class CircleSlamConfig:
         check_positive(owner, "min_views_radius_m", self.min_views_radius_m)
         check_int(owner, "min_views_max_age", self.min_views_max_age, 1)
         _check_tuple(owner, "radius_bounds_m", self.radius_bounds_m, 2, "(low, high) in m")
+        check_choice(owner, "admission", self.admission, ADMISSIONS)
         low, high = self.radius_bounds_m
         if not 0.0 < low < high:
             raise ValueError(
@@ -210,6 +242,38 @@ class CircleObservation:
         return np.array([self.centre[0], self.centre[1], self.R])
 
 
+@dataclass(frozen=True, eq=False)
+class ArcObservation:
+    """A segment of one scan that may be (part of) a circle: its beams' ``angles`` (n,) (rad,
+    robot frame) and ``ranges`` (n,) (m, from the scanner, finite); ``fit``, the circle
+    fitted to it when it was classified as one (the only way a new circle enters the map),
+    else None; ``circular``: whether some circle explains its points within the range noise
+    (a circle or a line, which is a circle's limit), the condition to be fused by its ranges."""
+
+    angles: FloatArray
+    ranges: FloatArray
+    fit: CircleObservation | None = None
+    circular: bool = True
+
+    def __post_init__(self) -> None:
+        angles = finite_vector(self.angles, "ArcObservation.angles", int(np.size(self.angles)))
+        ranges = finite_vector(self.ranges, "ArcObservation.ranges", len(angles))
+        if (ranges <= 0.0).any():
+            raise ValueError(f"ArcObservation.ranges must be > 0 (m), got {ranges.tolist()}")
+        if self.fit is not None and not isinstance(self.fit, CircleObservation):
+            raise InvalidTypeError(
+                f"ArcObservation.fit must be a CircleObservation or None, "
+                f"got {type(self.fit).__name__}"
+            )
+        if not isinstance(self.circular, (bool, np.bool_)):
+            raise InvalidTypeError(
+                f"ArcObservation.circular must be a bool, got {type(self.circular).__name__}"
+            )
+        object.__setattr__(self, "circular", bool(self.circular))
+        object.__setattr__(self, "angles", angles)
+        object.__setattr__(self, "ranges", ranges)
+
+
 @dataclass(frozen=True)
 class CircleUpdateResult:
     """What :meth:`CircleSlam.update` did with each of its M observations (indices into them).
@@ -220,7 +284,9 @@ class CircleUpdateResult:
     - ``added`` (A, 2): (circle, observation): circles this update added to the map;
     - ``buffered`` (B,): sightings of new circles held by tentative circles (``min_views``);
     - ``ambiguous`` (D,): unpaired, yet inside the new-circle gate of a mapped circle: dropped;
-    - ``refused`` (E,): radius outside ``radius_bounds_m``, observed or after the correction.
+    - ``refused`` (E,): radius outside ``radius_bounds_m``, observed or after the correction;
+    - ``dropped`` (G,): arcs of :meth:`CircleSlam.update_scan` without a fit that met no
+      circle (always empty from :meth:`CircleSlam.update`).
     """
 
     matched: IntArray
@@ -228,6 +294,31 @@ class CircleUpdateResult:
     buffered: IntArray
     ambiguous: IntArray
     refused: IntArray
+    dropped: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.intp))
+
+
+@dataclass
+class _Outcome:
+    """What an update did so far, as lists of observation indices (of pairs for the first
+    two), for :class:`CircleUpdateResult`."""
+
+    matched: list[tuple[int, int]] = field(default_factory=list)
+    added: list[tuple[int, int]] = field(default_factory=list)
+    buffered: list[int] = field(default_factory=list)
+    ambiguous: list[int] = field(default_factory=list)
+    refused: list[int] = field(default_factory=list)
+    dropped: list[int] = field(default_factory=list)
+
+    def result(self) -> CircleUpdateResult:
+        """The lists as index arrays, the unpaired ones sorted."""
+        return CircleUpdateResult(
+            matched=np.array(self.matched, dtype=np.intp).reshape(-1, 2),
+            added=np.array(self.added, dtype=np.intp).reshape(-1, 2),
+            buffered=np.array(self.buffered, dtype=np.intp),
+            ambiguous=np.array(sorted(self.ambiguous), dtype=np.intp),
+            refused=np.array(sorted(self.refused), dtype=np.intp),
+            dropped=np.array(sorted(self.dropped), dtype=np.intp),
+        )
 
 
 def observe_circle(pose: ArrayLike, circle: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -301,6 +392,10 @@ class CircleSlam:
         self._mu = np.zeros(_POSE)
         self._sigma = np.zeros((_POSE, _POSE))
         self._tentative: list[_Tentative] = []
+        self._ids: list[int] = []  # per mapped circle: its id, in the order circles were added
+        self._next_id = 0
+        self._hits: list[int] = []  # per mapped circle: sightings fused, its first included
+        self._last_seen: list[int] = []  # per mapped circle: the update that last fused it
         self._updates = 0
         self.reset(pose, pose_cov)
 
@@ -317,6 +412,8 @@ class CircleSlam:
             sigma = check_covariance(pose_cov, "pose_cov", _POSE, singular_ok=True)
         self._mu, self._sigma = mu, sigma
         self._tentative = []
+        self._ids, self._hits, self._last_seen = [], [], []
+        self._next_id = 0
         self._updates = 0
 
     @property
@@ -361,6 +458,25 @@ class CircleSlam:
         return (len(self._mu) - _POSE) // _CIRCLE
 
     @property
+    def circle_ids(self) -> IntArray:
+        """Per mapped circle (K,): its id, 0, 1, ... in the order circles entered the map; it
+        stays with the circle when provisional circles before it leave the state."""
+        return np.array(self._ids, dtype=np.intp)
+
+    @property
+    def hits(self) -> IntArray:
+        """Per mapped circle (K,): the sightings fused into it (with the one that added it)."""
+        return np.array(self._hits, dtype=np.intp)
+
+    @property
+    def confirmed(self) -> NDArray[np.bool_]:
+        """Per mapped circle (K,): whether it is confirmed (``hits >= min_views``; every
+        circle of the ``"buffered"`` admission, which maps circles only then)."""
+        if self._config.admission == "buffered":
+            return np.ones(self.n_circles, dtype=bool)
+        return self.hits >= self._config.min_views
+
+    @property
     def tentative_circles(self) -> FloatArray:
         """Circles (T, 3) (m, world) seen fewer than ``min_views`` times: their mean sighting."""
         means = [np.mean(t.views, axis=0) for t in self._tentative]
@@ -392,31 +508,97 @@ class CircleSlam:
         used, so a bad one leaves the filter unchanged.
         """
         checked = _checked_observations(observations)
-        self._updates += 1
-        low, high = self._config.radius_bounds_m
-        usable = [j for j, obs in enumerate(checked) if low <= obs.R <= high]
-        refused = [j for j, obs in enumerate(checked) if not low <= obs.R <= high]
-        cost = self._cost_matrix([checked[j] for j in usable])
-        association = global_nearest_neighbour(cost, self._gate)
-        matched = []
-        for k, u in association.matches.tolist():
-            if self._correct(k, checked[usable[u]]):
-                matched.append((k, usable[u]))
+        self._start_update()
+        outcome = _Outcome()
+        self._fuse_fits(list(enumerate(checked)), outcome)
+        return outcome.result()
+
+    def update_scan(
+        self, arcs: Sequence[ArcObservation], mount_x_m: float, range_sigma_m: float
+    ) -> CircleUpdateResult:
+        """Fuse one scan's segments by their ranges (module docstring, "Ranges").
+
+        ``arcs``: the segments; ``mount_x_m`` (m): the scanner ahead of the robot origin;
+        ``range_sigma_m`` (m, > 0): the range noise. Returns what became of each arc (indices
+        into ``arcs``): ``matched`` for those fused by their ranges or their fit, ``dropped``
+        for arcs without a fit that met no circle. All arcs are checked before any is used.
+        """
+        checked = _checked_arcs(arcs)
+        check_finite("", "mount_x_m", mount_x_m)
+        check_positive("", "range_sigma_m", range_sigma_m)
+        mount, noise = float(mount_x_m), float(range_sigma_m) ** 2
+        self._start_update()
+        outcome = _Outcome()
+        cost = np.full((self.n_circles, len(checked)), np.inf)
+        for k in range(self.n_circles):
+            for j, arc in enumerate(checked):
+                if arc.circular:
+                    cost[k, j] = self._arc_cost(k, arc, mount, noise)
+        association = global_nearest_neighbour(cost, 1.0)
+        for k, j in association.matches.tolist():
+            if self._correct_arc(k, checked[j], mount, noise):
+                self._fused(k)
+                outcome.matched.append((k, j))
             else:
-                refused.append(usable[u])
+                outcome.refused.append(j)
+        rest = association.unmatched_measurements.tolist()
+        fits = [(j, fit) for j in rest if (fit := checked[j].fit) is not None]
+        outcome.dropped += [j for j in rest if checked[j].fit is None]
+        self._fuse_fits(fits, outcome)
+        return outcome.result()
+
+    def _start_update(self) -> None:
+        """Count the update; remove the provisional circles unseen for ``min_views_max_age``
+        updates from the state (marginalised)."""
+        self._updates += 1
+        if self._config.admission != "provisional":
+            return
+        cfg = self._config
+        expired = [
+            k
+            for k in range(self.n_circles)
+            if self._hits[k] < cfg.min_views
+            and self._updates - self._last_seen[k] > cfg.min_views_max_age
+        ]
+        if not expired:
+            return
+        keep = [k for k in range(self.n_circles) if k not in expired]
+        rows = np.r_[
+            np.arange(_POSE),
+            (_POSE + _CIRCLE * np.array(keep, dtype=np.intp)[:, None] + np.arange(_CIRCLE)).ravel(),
+        ]
+        self._mu = self._mu[rows]
+        self._sigma = self._sigma[np.ix_(rows, rows)]
+        self._ids = [self._ids[k] for k in keep]
+        self._hits = [self._hits[k] for k in keep]
+        self._last_seen = [self._last_seen[k] for k in keep]
+
+    def _fused(self, index: int) -> None:
+        """Count a sighting fused into circle ``index``."""
+        self._hits[index] += 1
+        self._last_seen[index] = self._updates
+
+    def _fuse_fits(self, indexed: list[tuple[int, CircleObservation]], outcome: _Outcome) -> None:
+        """Steps 1-4 of the module docstring on circle fits, (index, observation) pairs; what
+        became of each index is added to ``outcome``."""
+        low, high = self._config.radius_bounds_m
+        usable = [(j, obs) for j, obs in indexed if low <= obs.R <= high]
+        outcome.refused += [j for j, obs in indexed if not low <= obs.R <= high]
+        cost = self._cost_matrix([obs for _, obs in usable])
+        association = global_nearest_neighbour(cost, self._gate)
+        for k, u in association.matches.tolist():
+            j, obs = usable[u]
+            if self._correct(k, obs):
+                self._fused(k)
+                outcome.matched.append((k, j))
+            else:
+                outcome.refused.append(j)
         unpaired = association.unmatched_measurements.tolist()
         new = {u for u in unpaired if bool((cost[:, u] > self._new_gate).all())}
-        ambiguous = [usable[u] for u in unpaired if u not in new]
-        added, buffered = self._sight_new(
-            [(usable[u], checked[usable[u]]) for u in unpaired if u in new]
-        )
-        return CircleUpdateResult(
-            matched=np.array(matched, dtype=np.intp).reshape(-1, 2),
-            added=np.array(added, dtype=np.intp).reshape(-1, 2),
-            buffered=np.array(buffered, dtype=np.intp),
-            ambiguous=np.array(ambiguous, dtype=np.intp),
-            refused=np.array(sorted(refused), dtype=np.intp),
-        )
+        outcome.ambiguous += [usable[u][0] for u in unpaired if u not in new]
+        added, buffered = self._sight_new([usable[u] for u in unpaired if u in new])
+        outcome.added += added
+        outcome.buffered += buffered
 
     def measurement(self, index: int) -> tuple[FloatArray, FloatArray, FloatArray]:
         """``z_hat`` (3,), the nonzero block of ``H`` (3, 6) and its state indices (6,) for
@@ -432,6 +614,67 @@ class CircleSlam:
         )
         state_index = np.r_[np.arange(_POSE), column + np.arange(_CIRCLE)]
         return z_hat, np.hstack([H_pose, H_circle]), state_index
+
+    def _measure_arc(
+        self, state: FloatArray, column: int, angles: FloatArray, mount: float
+    ) -> tuple[NDArray[np.bool_], FloatArray, FloatArray] | None:
+        """For beams at ``angles`` (n,) (rad, robot frame): those ``used`` (n,), their predicted
+        ranges (k,) and ``H`` (k, 6) on the pose and the circle at ``column`` of ``state``
+        (:func:`~perception.circles.model.measure_arc`); None when fewer than three beams meet
+        the circle away from its tangents."""
+        x, y, theta = state[:_POSE]
+        c, s = np.cos(theta), np.sin(theta)
+        origin = np.array([x + mount * c, y + mount * s])
+        arc_model = measure_arc(state[column : column + _CIRCLE], state[:2], origin, theta + angles)
+        if arc_model is None:
+            return None
+        H = np.hstack([arc_model.H_pose, arc_model.H_circle])
+        return arc_model.used, arc_model.ranges, H
+
+    def _arc_cost(self, index: int, arc: ArcObservation, mount: float, noise: float) -> float:
+        """The arc's normalised innovation squared on circle ``index`` over its gate,
+        ``y^T S^-1 y / chi2_k(gate_probability)`` for its k used beams (in the gate: <= 1);
+        inf when fewer than three beams meet the circle."""
+        column = _POSE + _CIRCLE * index
+        model = self._measure_arc(self._mu, column, arc.angles, mount)
+        if model is None:
+            return np.inf
+        used, ranges, H = model
+        index6 = np.r_[np.arange(_POSE), column + np.arange(_CIRCLE)]
+        S = innovation_covariance(self._sigma, H, noise * np.eye(len(ranges)), index6)
+        d2 = float(mahalanobis_squared(arc.ranges[used] - ranges, S))
+        return d2 / _arc_gate(self._config.gate_probability, len(ranges))
+
+    def _correct_arc(self, index: int, arc: ArcObservation, mount: float, noise: float) -> bool:
+        """Fuse the arc's ranges into circle ``index`` by an iterated EKF (Gauss-Newton
+        re-linearisation on the beams chosen at the prior, Joseph form; the iterations stop
+        early, at the last iterate, when one of those beams would graze or miss the circle);
+        whether it was not refused (a radius out of bounds)."""
+        column = _POSE + _CIRCLE * index
+        index6 = np.r_[np.arange(_POSE), column + np.arange(_CIRCLE)]
+        prior = self._mu[index6]
+        model = self._measure_arc(self._mu, column, arc.angles, mount)
+        if model is None:
+            return False
+        used = model[0]
+        angles, z, R = arc.angles[used], arc.ranges[used], noise * np.eye(int(used.sum()))
+        mu, sigma = self._mu, self._sigma
+        for iteration in range(_ARC_ITERATIONS):
+            if iteration:
+                model = self._measure_arc(mu, column, angles, mount)
+                if model is None or not model[0].all():
+                    break
+            _, ranges, H = model
+            back = prior - mu[index6]  # iterated EKF: the innovation taken against the prior
+            back[2] = wrap_angle(back[2])
+            mu, sigma = joseph_update(self._mu, self._sigma, z - ranges - H @ back, H, R, index6)
+        low, high = self._config.radius_bounds_m
+        radii = mu[_POSE + 2 :: _CIRCLE]
+        if not ((radii >= low) & (radii <= high)).all():
+            return False
+        mu[2] = wrap_angle(mu[2])
+        self._mu, self._sigma = mu, sigma
+        return True
 
     def _cost_matrix(self, observations: list[CircleObservation]) -> FloatArray:
         """Squared Mahalanobis distances (K, M) of the observations to the mapped circles.
@@ -472,6 +715,11 @@ class CircleSlam:
         ``sightings``: (observation index, observation) pairs. Returns the (circle, observation)
         pairs added and the observation indices buffered.
         """
+        if self._config.admission == "provisional":
+            added = [(self.n_circles + i, j) for i, (j, _) in enumerate(sightings)]
+            for _, obs in sightings:
+                self._add_circle(obs)
+            return added, []
         pose = self._mu[:_POSE]
         worlds = [inverse_observe_circle(pose, obs.z)[0] for _, obs in sightings]
         holders = self._tentatives_for(worlds)
@@ -525,6 +773,28 @@ class CircleSlam:
         sigma[n:, n:] = 0.5 * (sigma_mm + sigma_mm.T)
         self._sigma = sigma
         self._mu = np.concatenate([self._mu, circle])
+        self._ids.append(self._next_id)
+        self._next_id += 1
+        self._hits.append(1)
+        self._last_seen.append(self._updates)
+
+
+def _checked_arcs(arcs: object) -> list[ArcObservation]:
+    """``arcs`` as a list, after checking it is a sequence of ArcObservation."""
+    if isinstance(arcs, ArcObservation) or not isinstance(arcs, Sequence):
+        raise InvalidTypeError(
+            f"arcs must be a sequence of ArcObservation, got {type(arcs).__name__}"
+        )
+    for i, arc in enumerate(arcs):
+        if not isinstance(arc, ArcObservation):
+            raise InvalidTypeError(f"arcs[{i}] must be an ArcObservation, got {type(arc).__name__}")
+    return list(arcs)
+
+
+@lru_cache(maxsize=256)
+def _arc_gate(probability: float, beams: int) -> float:
+    """The chi-square quantile of ``probability`` with ``beams`` degrees of freedom."""
+    return chi2_threshold(probability, beams)
 
 
 def _checked_observations(observations: object) -> list[CircleObservation]:

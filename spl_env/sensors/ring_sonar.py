@@ -81,4 +81,3 @@ class RingSonar:
         noisy = nearest + c.range_noise_std_m * rng.standard_normal(len(nearest))
         in_range = (noisy >= c.min_range_m) & (noisy <= c.max_range_m)
         return np.where(in_range, noisy, np.nan)
-

@@ -206,6 +206,20 @@ def test_same_seed_same_observations_and_info() -> None:
             np.testing.assert_array_equal(u, v)
 
 
+def test_the_laser_circle_map_runs_on_the_circle_slam_pose() -> None:
+    # the filter starts certain of its pose (a singular covariance): the laser mapper takes it
+    env = OfficeEnv(episode_s=2.0, circle_map="laser")
+    env.reset(seed=0)
+    for _ in range(15):
+        _, _, _, _, info = env.step(np.array([0.3, 0.3], dtype=np.float32))
+    mapped = info["perception"]["circles"][info["perception"]["circles_mapped"]]
+    truth = info["ground_truth"]["circles"]
+    assert len(mapped) >= 1
+    nearest = np.min(np.hypot(*(mapped[:, None, :2] - truth[None, :, :2]).transpose(2, 0, 1)), 1)
+    assert (nearest < 0.1).all()
+    env.close()
+
+
 def test_braitenberg_keeps_the_robot_off_the_walls() -> None:
     env = OfficeEnv(episode_s=30.0)
     driver = BraitenbergDriver()

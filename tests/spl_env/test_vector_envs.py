@@ -21,6 +21,7 @@ def fast(env_id: str) -> dict[str, Any]:
     """Short episodes; the SPL envs in the geometric camera mode."""
     return SPL_FAST if env_id.startswith("SPL/") else {"episode_s": 1.0}
 
+
 N_ENVS = 2
 STEPS = 12  # one episode is 10 steps: the vector envs reset a sub-env on the way
 
