@@ -230,7 +230,10 @@ def fuse_circles(
     ]
     fits = [geometric_fit(p) for p in sets]
     covariances = [_kcr(p, fit, config.sigma_m) for p, fit in zip(sets, fits, strict=True)]
-    groups = _components(len(sets), lambda i, j: _same_object(i, j, fits, covariances, config))
+    threshold = float(chi2.isf(config.significance, _CIRCLE_PARAMETERS))
+    groups = _components(
+        len(sets), lambda i, j: _same_object(i, j, fits, covariances, config, threshold)
+    )
     fused = []
     for members in groups:
         points = np.concatenate([sets[i] for i in members])
@@ -356,14 +359,16 @@ def _same_object(
     fits: Sequence[CircleFit],
     covariances: Sequence[FloatArray],
     config: FusionConfig,
+    threshold: float,
 ) -> bool:
-    """Whether fits ``i`` and ``j`` see one object under ``config.gate``."""
+    """Whether fits ``i`` and ``j`` see one object under ``config.gate`` (``threshold``: the
+    Mahalanobis gate's chi-square quantile, computed once per fusion)."""
     a, b = fits[i], fits[j]
     if config.gate == "overlap":
         return bool(np.linalg.norm(a.centre - b.centre) < a.R + b.R)
     difference = np.append(a.centre - b.centre, a.R - b.R)
     distance2 = difference @ np.linalg.solve(covariances[i] + covariances[j], difference)
-    return bool(distance2 <= chi2.isf(config.significance, _CIRCLE_PARAMETERS))
+    return bool(distance2 <= threshold)
 
 
 def _components(n: int, linked: Callable[[int, int], bool]) -> list[tuple[int, ...]]:
