@@ -123,6 +123,7 @@ _POSE = 3  # entries of the pose in the state
 _CIRCLE = 3  # entries of a circle in the state: (c_x, c_y, R)
 _DOF = 3  # dimension of a circle observation, for the chi-square gates
 _ARC_ITERATIONS = 3  # Gauss-Newton re-linearisations of a range (arc) update
+_ARC_STEP_HALVINGS = 3  # halvings of a re-linearisation step that would graze a chosen beam
 _ODOMETRY_FIELDS = (
     "translation_noise_m_per_sqrt_m",
     "translation_noise_m_per_sqrt_rad",
@@ -646,10 +647,11 @@ class CircleSlam:
         return d2 / _arc_gate(self._config.gate_probability, len(ranges))
 
     def _correct_arc(self, index: int, arc: ArcObservation, mount: float, noise: float) -> bool:
-        """Fuse the arc's ranges into circle ``index`` by an iterated EKF (Gauss-Newton
-        re-linearisation on the beams chosen at the prior, Joseph form; the iterations stop
-        early, at the last iterate, when one of those beams would graze or miss the circle);
-        whether it was not refused (a radius out of bounds)."""
+        """Fuse the arc's ranges into circle ``index`` by an iterated EKF on the beams chosen at
+        the prior (Joseph form): each iteration re-linearises at the previous one's Gauss-Newton
+        step, halved (up to ``_ARC_STEP_HALVINGS`` times) while one of those beams would graze
+        or miss the circle there, and stops early when no halving helps. Returns whether the
+        update was made (refused: a radius out of bounds)."""
         column = _POSE + _CIRCLE * index
         index6 = np.r_[np.arange(_POSE), column + np.arange(_CIRCLE)]
         prior = self._mu[index6]
@@ -658,16 +660,23 @@ class CircleSlam:
             return False
         used = model[0]
         angles, z, R = arc.angles[used], arc.ranges[used], noise * np.eye(int(used.sum()))
-        mu, sigma = self._mu, self._sigma
+        at = self._mu  # the linearisation point
         for iteration in range(_ARC_ITERATIONS):
-            if iteration:
-                model = self._measure_arc(mu, column, angles, mount)
-                if model is None or not model[0].all():
-                    break
             _, ranges, H = model
-            back = prior - mu[index6]  # iterated EKF: the innovation taken against the prior
+            back = prior - at[index6]  # iterated EKF: the innovation taken against the prior
             back[2] = wrap_angle(back[2])
             mu, sigma = joseph_update(self._mu, self._sigma, z - ranges - H @ back, H, R, index6)
+            if iteration == _ARC_ITERATIONS - 1:
+                break
+            step = mu - at
+            for _ in range(_ARC_STEP_HALVINGS + 1):
+                model = self._measure_arc(at + step, column, angles, mount)
+                if model is not None and model[0].all():
+                    break
+                step = 0.5 * step
+            else:
+                break  # every halved step grazes a chosen beam: keep this iteration's estimate
+            at = at + step
         low, high = self._config.radius_bounds_m
         radii = mu[_POSE + 2 :: _CIRCLE]
         if not ((radii >= low) & (radii <= high)).all():
