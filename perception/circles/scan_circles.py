@@ -25,7 +25,7 @@ from perception.circles.classification import ClassificationConfig, classify_seg
 from perception.circles.fits import angles_around_centre, kcr_covariance
 from perception.circles.segmentation import BreakpointConfig, Segment, segment_breakpoints
 from perception.geometry import FloatArray
-from perception.slam.circle_slam import ArcObservation, CircleObservation
+from perception.slam.circle_observations import ArcObservation, CircleObservation
 from perception.validation import InvalidTypeError, check_positive
 
 

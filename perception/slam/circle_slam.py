@@ -72,14 +72,13 @@ mapped circle (eq. 3.2, convex side, :func:`perception.circles.model.measure_arc
 ranges of the beams that meet the circle away from its tangents, ``H`` (k, 6) on the pose and
 the circle, ``Q = sigma_r^2 I``). An arc pairs with a circle by global nearest neighbour on its
 normalised innovation squared over the chi-square (k dof) quantile of ``gate_probability`` (in
-the gate: <= 1) and is fused by an iterated EKF (Gauss-Newton re-linearisation on the beams
-chosen at the prior). Only arcs that some circle explains within the range noise
-(``ArcObservation.circular``, the classification's test) pair by their ranges: the flat face of
-a trunk cut by a chord, with its rounded ends, is explained by neither a line nor a circle.
-Ranges carry no fit's bias: a circle fit of a short arc is pulled towards a smaller radius, and
-one is only made when the arc looks curved enough not to be a line, a selection that pulls the
-same way. Arcs that pair with no circle go through steps 1-4 by their circle fit, when they
-have one.
+the gate: <= 1) and is fused by an iterated EKF (:mod:`perception.slam.circle_observations`).
+Only arcs that some circle explains within the range noise (``ArcObservation.circular``, the
+classification's test) pair by their ranges: the flat face of a trunk cut by a chord, with its
+rounded ends, is explained by neither a line nor a circle. Ranges carry no fit's bias: a circle
+fit of a short arc is pulled towards a smaller radius, and one is only made when the arc looks
+curved enough not to be a line, a selection that pulls the same way. Arcs that pair with no
+circle go through steps 1-4 by their circle fit, when they have one.
 
 Consistency (tests/perception/test_circle_slam.py, 30 Monte Carlo laps among 4 columns): the
 pose NEES stays in its 95 % chi-square band; the map NEES does at a quarter of the default
@@ -91,17 +90,23 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from functools import cached_property, lru_cache
+from functools import cached_property
 from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from perception.circles.model import measure_arc
 from perception.estimation.association import global_nearest_neighbour, mahalanobis_cost_matrix
-from perception.estimation.gating import chi2_threshold, mahalanobis_squared
+from perception.estimation.gating import chi2_threshold
 from perception.estimation.kalman import innovation_covariance, joseph_update
 from perception.geometry import FloatArray, wrap_angle
+from perception.slam.circle_observations import (
+    ArcCircle,
+    ArcObservation,
+    CircleObservation,
+    arc_cost,
+    fuse_arc,
+)
 from perception.slam.ekf_slam import EkfSlamConfig, motion
 from perception.validation import (
     InvalidTypeError,
@@ -122,8 +127,6 @@ ADMISSIONS: tuple[Admission, ...] = ("buffered", "provisional")
 _POSE = 3  # entries of the pose in the state
 _CIRCLE = 3  # entries of a circle in the state: (c_x, c_y, R)
 _DOF = 3  # dimension of a circle observation, for the chi-square gates
-_ARC_ITERATIONS = 3  # Gauss-Newton re-linearisations of a range (arc) update
-_ARC_STEP_HALVINGS = 3  # halvings of a re-linearisation step that would graze a chosen beam
 _ODOMETRY_FIELDS = (
     "translation_noise_m_per_sqrt_m",
     "translation_noise_m_per_sqrt_rad",
@@ -216,63 +219,6 @@ class CircleSlamConfig:
         :meth:`perception.slam.ekf_slam.EkfSlamConfig.odometry_cov` with this config's fields.
         """
         return self._odometry.odometry_cov(increment)
-
-
-@dataclass(frozen=True, eq=False)
-class CircleObservation:
-    """A circle seen in one scan: ``centre`` (2,) (m, robot frame), radius ``R`` (m) and the
-    covariance ``cov`` (3, 3) of ``(centre_x, centre_y, R)`` (m²), e.g. a
-    :class:`~perception.circles.fits.CircleFit` with its
-    :func:`~perception.circles.fits.kcr_covariance`, moved from the laser's frame into the
-    robot's (the laser sits ahead of the axle)."""
-
-    centre: FloatArray
-    R: float
-    cov: FloatArray
-
-    def __post_init__(self) -> None:
-        centre = finite_vector(self.centre, "CircleObservation.centre", 2)
-        check_positive("CircleObservation", "R", self.R)
-        cov = check_covariance(self.cov, "CircleObservation.cov", 3)
-        object.__setattr__(self, "centre", centre)
-        object.__setattr__(self, "cov", cov)
-
-    @property
-    def z(self) -> FloatArray:
-        """The measurement ``(z_x, z_y, z_R)`` (3,) (m)."""
-        return np.array([self.centre[0], self.centre[1], self.R])
-
-
-@dataclass(frozen=True, eq=False)
-class ArcObservation:
-    """A segment of one scan that may be (part of) a circle: its beams' ``angles`` (n,) (rad,
-    robot frame) and ``ranges`` (n,) (m, from the scanner, finite); ``fit``, the circle
-    fitted to it when it was classified as one (the only way a new circle enters the map),
-    else None; ``circular``: whether some circle explains its points within the range noise
-    (a circle or a line, which is a circle's limit), the condition to be fused by its ranges."""
-
-    angles: FloatArray
-    ranges: FloatArray
-    fit: CircleObservation | None = None
-    circular: bool = True
-
-    def __post_init__(self) -> None:
-        angles = finite_vector(self.angles, "ArcObservation.angles", int(np.size(self.angles)))
-        ranges = finite_vector(self.ranges, "ArcObservation.ranges", len(angles))
-        if (ranges <= 0.0).any():
-            raise ValueError(f"ArcObservation.ranges must be > 0 (m), got {ranges.tolist()}")
-        if self.fit is not None and not isinstance(self.fit, CircleObservation):
-            raise InvalidTypeError(
-                f"ArcObservation.fit must be a CircleObservation or None, "
-                f"got {type(self.fit).__name__}"
-            )
-        if not isinstance(self.circular, (bool, np.bool_)):
-            raise InvalidTypeError(
-                f"ArcObservation.circular must be a bool, got {type(self.circular).__name__}"
-            )
-        object.__setattr__(self, "circular", bool(self.circular))
-        object.__setattr__(self, "angles", angles)
-        object.__setattr__(self, "ranges", ranges)
 
 
 @dataclass(frozen=True)
@@ -527,17 +473,17 @@ class CircleSlam:
         checked = _checked_arcs(arcs)
         check_finite("", "mount_x_m", mount_x_m)
         check_positive("", "range_sigma_m", range_sigma_m)
-        mount, noise = float(mount_x_m), float(range_sigma_m) ** 2
+        mount, sigma_r = float(mount_x_m), float(range_sigma_m)
         self._start_update()
         outcome = _Outcome()
         cost = np.full((self.n_circles, len(checked)), np.inf)
         for k in range(self.n_circles):
             for j, arc in enumerate(checked):
                 if arc.circular:
-                    cost[k, j] = self._arc_cost(k, arc, mount, noise)
+                    cost[k, j] = self._arc_cost(k, arc, mount, sigma_r)
         association = global_nearest_neighbour(cost, 1.0)
         for k, j in association.matches.tolist():
-            if self._correct_arc(k, checked[j], mount, noise):
+            if self._correct_arc(k, checked[j], mount, sigma_r):
                 self._fused(k)
                 outcome.matched.append((k, j))
             else:
@@ -616,72 +562,26 @@ class CircleSlam:
         state_index = np.r_[np.arange(_POSE), column + np.arange(_CIRCLE)]
         return z_hat, np.hstack([H_pose, H_circle]), state_index
 
-    def _measure_arc(
-        self, state: FloatArray, column: int, angles: FloatArray, mount: float
-    ) -> tuple[NDArray[np.bool_], FloatArray, FloatArray] | None:
-        """For beams at ``angles`` (n,) (rad, robot frame): those ``used`` (n,), their predicted
-        ranges (k,) and ``H`` (k, 6) on the pose and the circle at ``column`` of ``state``
-        (:func:`~perception.circles.model.measure_arc`); None when fewer than three beams meet
-        the circle away from its tangents."""
-        x, y, theta = state[:_POSE]
-        c, s = np.cos(theta), np.sin(theta)
-        origin = np.array([x + mount * c, y + mount * s])
-        arc_model = measure_arc(state[column : column + _CIRCLE], state[:2], origin, theta + angles)
-        if arc_model is None:
-            return None
-        H = np.hstack([arc_model.H_pose, arc_model.H_circle])
-        return arc_model.used, arc_model.ranges, H
+    def _arc_cost(self, index: int, arc: ArcObservation, mount: float, sigma_r: float) -> float:
+        """The arc's pairing cost with circle ``index`` (:func:`arc_cost`)."""
+        where = ArcCircle(_POSE + _CIRCLE * index)
+        return arc_cost(
+            self._mu, self._sigma, where, arc, mount, sigma_r, self._config.gate_probability
+        )
 
-    def _arc_cost(self, index: int, arc: ArcObservation, mount: float, noise: float) -> float:
-        """The arc's normalised innovation squared on circle ``index`` over its gate,
-        ``y^T S^-1 y / chi2_k(gate_probability)`` for its k used beams (in the gate: <= 1);
-        inf when fewer than three beams meet the circle."""
-        column = _POSE + _CIRCLE * index
-        model = self._measure_arc(self._mu, column, arc.angles, mount)
-        if model is None:
-            return np.inf
-        used, ranges, H = model
-        index6 = np.r_[np.arange(_POSE), column + np.arange(_CIRCLE)]
-        S = innovation_covariance(self._sigma, H, noise * np.eye(len(ranges)), index6)
-        d2 = float(mahalanobis_squared(arc.ranges[used] - ranges, S))
-        return d2 / _arc_gate(self._config.gate_probability, len(ranges))
-
-    def _correct_arc(self, index: int, arc: ArcObservation, mount: float, noise: float) -> bool:
-        """Fuse the arc's ranges into circle ``index`` by an iterated EKF on the beams chosen at
-        the prior (Joseph form): each iteration re-linearises at the previous one's Gauss-Newton
-        step, halved (up to ``_ARC_STEP_HALVINGS`` times) while one of those beams would graze
-        or miss the circle there, and stops early when no halving helps. Returns whether the
-        update was made (refused: a radius out of bounds)."""
-        column = _POSE + _CIRCLE * index
-        index6 = np.r_[np.arange(_POSE), column + np.arange(_CIRCLE)]
-        prior = self._mu[index6]
-        model = self._measure_arc(self._mu, column, arc.angles, mount)
-        if model is None:
+    def _correct_arc(self, index: int, arc: ArcObservation, mount: float, sigma_r: float) -> bool:
+        """Fuse the arc's ranges into circle ``index`` (:func:`fuse_arc`); whether the update was
+        made (refused: fewer than three beams meet the circle, or a radius out of bounds)."""
+        fused = fuse_arc(
+            self._mu, self._sigma, ArcCircle(_POSE + _CIRCLE * index), arc, mount, sigma_r
+        )
+        if fused is None:
             return False
-        used = model[0]
-        angles, z, R = arc.angles[used], arc.ranges[used], noise * np.eye(int(used.sum()))
-        at = self._mu  # the linearisation point
-        for iteration in range(_ARC_ITERATIONS):
-            _, ranges, H = model
-            back = prior - at[index6]  # iterated EKF: the innovation taken against the prior
-            back[2] = wrap_angle(back[2])
-            mu, sigma = joseph_update(self._mu, self._sigma, z - ranges - H @ back, H, R, index6)
-            if iteration == _ARC_ITERATIONS - 1:
-                break
-            step = mu - at
-            for _ in range(_ARC_STEP_HALVINGS + 1):
-                model = self._measure_arc(at + step, column, angles, mount)
-                if model is not None and model[0].all():
-                    break
-                step = 0.5 * step
-            else:
-                break  # every halved step grazes a chosen beam: keep this iteration's estimate
-            at = at + step
+        mu, sigma = fused
         low, high = self._config.radius_bounds_m
         radii = mu[_POSE + 2 :: _CIRCLE]
         if not ((radii >= low) & (radii <= high)).all():
             return False
-        mu[2] = wrap_angle(mu[2])
         self._mu, self._sigma = mu, sigma
         return True
 
@@ -798,12 +698,6 @@ def _checked_arcs(arcs: object) -> list[ArcObservation]:
         if not isinstance(arc, ArcObservation):
             raise InvalidTypeError(f"arcs[{i}] must be an ArcObservation, got {type(arc).__name__}")
     return list(arcs)
-
-
-@lru_cache(maxsize=256)
-def _arc_gate(probability: float, beams: int) -> float:
-    """The chi-square quantile of ``probability`` with ``beams`` degrees of freedom."""
-    return chi2_threshold(probability, beams)
 
 
 def _checked_observations(observations: object) -> list[CircleObservation]:
