@@ -19,6 +19,7 @@ and whose radius either follows it in the state or is known (``radius``, e.g. an
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -194,6 +195,18 @@ def fuse_arc(
         at, model = at + step, candidate
     new_mu[2] = wrap_angle(new_mu[2])
     return new_mu, new_sigma
+
+
+def checked_arcs(arcs: object) -> list[ArcObservation]:
+    """``arcs`` as a list, after checking it is a sequence of ArcObservation."""
+    if isinstance(arcs, ArcObservation) or not isinstance(arcs, Sequence):
+        raise InvalidTypeError(
+            f"arcs must be a sequence of ArcObservation, got {type(arcs).__name__}"
+        )
+    for i, arc in enumerate(arcs):
+        if not isinstance(arc, ArcObservation):
+            raise InvalidTypeError(f"arcs[{i}] must be an ArcObservation, got {type(arc).__name__}")
+    return list(arcs)
 
 
 @lru_cache(maxsize=256)

@@ -105,6 +105,7 @@ from perception.slam.circle_observations import (
     ArcObservation,
     CircleObservation,
     arc_cost,
+    checked_arcs,
     fuse_arc,
 )
 from perception.slam.ekf_slam import EkfSlamConfig, motion
@@ -470,7 +471,7 @@ class CircleSlam:
         into ``arcs``): ``matched`` for those fused by their ranges or their fit, ``dropped``
         for arcs without a fit that met no circle. All arcs are checked before any is used.
         """
-        checked = _checked_arcs(arcs)
+        checked = checked_arcs(arcs)
         check_finite("", "mount_x_m", mount_x_m)
         check_positive("", "range_sigma_m", range_sigma_m)
         mount, sigma_r = float(mount_x_m), float(range_sigma_m)
@@ -686,18 +687,6 @@ class CircleSlam:
         self._next_id += 1
         self._hits.append(1)
         self._last_seen.append(self._updates)
-
-
-def _checked_arcs(arcs: object) -> list[ArcObservation]:
-    """``arcs`` as a list, after checking it is a sequence of ArcObservation."""
-    if isinstance(arcs, ArcObservation) or not isinstance(arcs, Sequence):
-        raise InvalidTypeError(
-            f"arcs must be a sequence of ArcObservation, got {type(arcs).__name__}"
-        )
-    for i, arc in enumerate(arcs):
-        if not isinstance(arc, ArcObservation):
-            raise InvalidTypeError(f"arcs[{i}] must be an ArcObservation, got {type(arc).__name__}")
-    return list(arcs)
 
 
 def _checked_observations(observations: object) -> list[CircleObservation]:
