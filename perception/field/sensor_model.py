@@ -1,0 +1,547 @@
+"""The unified field-feature sensor model of seed 004 (§2.2): one pose from all of a frame's
+field features at once, by an ICP over point pairs with hierarchical matching.
+
+Given the features of a frame (:class:`~perception.field.features.FieldFeature`, robot frame),
+the field map and a prior pose (the pose filter's), :func:`observe_pose` returns the pose that
+places the features best on the map, with its information matrix, or None when the features
+cannot be placed consistently.
+
+**Pre-processing** (:func:`match_items`) makes features more distinctive by what is seen with
+them in the same frame; the field edges are then dropped:
+
+- two goal posts about a goal's width apart become one item, matched to the two posts of a
+  goal in the same left-right order;
+- two parallel lines become one item, matched to two parallel map lines as far apart;
+- a T junction with a goal post beside it (within ``relation_range_m``) may only match a map T
+  junction that has a map post where the seen post lies in the junction's own frame (within
+  ``relation_tolerance_m``); a corner with a field edge may only match a map corner with a map
+  edge as far away and as turned; a line parallel to a field edge may only match a map line as
+  far from a map edge: the seed's sub-categories, found from the map rather than listed.
+
+**Hierarchical matching**, in the seed's order: two posts, parallel lines, corners, T junctions,
+a single post, then (ours) penalty marks, the centre circle and X junctions, then single lines;
+within a rank the nearest item first. Iteration k matches the first k items (at least one),
+each placed in the field with the current pose to its nearest map candidate (Euclidean distance
+of its points, directions weighted by ``direction_scale_m_per_rad``; a line's ends by their
+distance to the map segment).
+
+**Point pairs**: a post, a mark and a centre circle seen without direction give one pair; a
+junction, a centre circle with direction and a line give two (a junction's vertex and a point
+``junction_arm_m`` along its direction; a line's two ends, each paired with its foot on the
+map line). A line's pairs count only across the line, the two-of-three constraint of eqs. 6-7
+(the field's lines run along x or y), so a line never pins the pose along itself. Each pair
+is weighted by the inverse distance of the feature from the robot (at least
+``min_weight_distance_m``).
+
+**Least squares step** (eqs. 1-5): with ``c`` the weighted centroid of the placed points ``p_i``,
+``J = [[0, -1], [1, 0]]`` and a selection ``S_i`` of the counted components, the step
+``(t_x, t_y, dtheta)`` minimises ``sum_i w_i |S_i (q_i - p_i - t - dtheta J (p_i - c))|^2``, the
+seed's linearised rotation (``sin dtheta ~ dtheta``, ``cos dtheta ~ 1``) about the centroid,
+solved by SVD least squares (:func:`numpy.linalg.lstsq`; the minimum-norm step leaves an
+unconstrained direction alone); the pose is then turned by ``dtheta`` about ``c`` exactly and
+moved by ``t``. The error ``e`` is the weighted mean of the squared residuals (eq. 1). The
+iterations stop once every item is matched and ``e`` falls below ``converged_rms_m²`` or has not
+fallen for two iterations, or after ``max_iterations``; a final RMS above ``accept_rms_m`` says
+the features do not fit together (a false detection, or a prior so poor that the match is
+wrong) and the observation is refused.
+
+**Information**: first order at the final pose, from the features' covariances: each point
+pair's counted components ``S_i (pos + Rot(theta) f_i)`` with ``f_i`` the point in the robot
+frame and covariance ``S_i Rot C_i Rot^T S_i^T``; a direction contributes ``1 / std^2`` to the
+heading. A junction's second point is not counted again (its vertex and direction are), the
+errors of different features are taken as independent.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from perception.field.features import AXIAL_KINDS, FeatureKind, FieldFeature
+from perception.field.field_map import FieldMap, MapFeature
+from perception.field.pose_observation import PoseObservation
+from perception.geometry import FloatArray, wrap_angle
+from perception.validation import InvalidTypeError, check_int, check_positive, finite_vector
+
+_J = np.array([[0.0, -1.0], [1.0, 0.0]])  # a quarter turn: d Rot(a) / da at a = 0
+PARALLEL_RAD = math.radians(10.0)  # two lines within this of each other are parallel
+RIGHT_ANGLE_TOLERANCE_RAD = math.radians(15.0)
+
+# rank of each item in the hierarchical matching (seed order, ours in between)
+RANKS = {
+    "two_posts": 0,
+    "parallel_lines": 1,
+    "corner": 2,
+    "t_junction": 3,
+    "goal_post": 4,
+    "penalty_mark": 5,
+    "centre_circle": 6,
+    "x_junction": 6,
+    "line": 7,
+}
+
+
+@dataclass(frozen=True, kw_only=True)
+class SensorModelConfig:
+    """Settings of :func:`observe_pose` (module docstring for each; all > 0).
+
+    ``direction_scale_m_per_rad`` (m/rad): a direction difference's weight in the matching
+    distance, the seed's "arbitrary scaling factor"; ``junction_arm_m`` (m); ``relation_range_m``
+    (m) and ``relation_tolerance_m`` (m): pre-processing; ``min_weight_distance_m`` (m);
+    ``max_iterations`` (int >= 1); ``converged_rms_m`` and ``accept_rms_m`` (m).
+    """
+
+    direction_scale_m_per_rad: float = 0.5
+    junction_arm_m: float = 0.5
+    relation_range_m: float = 2.5
+    relation_tolerance_m: float = 0.3
+    min_weight_distance_m: float = 0.3
+    max_iterations: int = 30
+    converged_rms_m: float = 1e-6
+    accept_rms_m: float = 0.15
+
+    def __post_init__(self) -> None:
+        owner = "SensorModelConfig"
+        for name in (
+            "direction_scale_m_per_rad",
+            "junction_arm_m",
+            "relation_range_m",
+            "relation_tolerance_m",
+            "min_weight_distance_m",
+            "converged_rms_m",
+            "accept_rms_m",
+        ):
+            check_positive(owner, name, getattr(self, name))
+        check_int(owner, "max_iterations", self.max_iterations, 1)
+
+
+@dataclass(frozen=True, eq=False)
+class MatchItem:
+    """What is matched as one: ``kind`` (a feature kind, ``"two_posts"`` or
+    ``"parallel_lines"``), its ``features`` (1 or 2, robot frame) and the map ``candidates``
+    it may match, each a tuple of as many map features."""
+
+    kind: str
+    features: tuple[FieldFeature, ...]
+    candidates: tuple[tuple[MapFeature, ...], ...]
+
+    @property
+    def distance_m(self) -> float:
+        """The nearest of its features' distances from the robot (m)."""
+        return min(f.distance_m for f in self.features)
+
+
+@dataclass(frozen=True)
+class SensorModelResult:
+    """What :func:`observe_pose` found: ``observation`` (None when refused or nothing could be
+    matched), the final ``pose`` (3,) and ``rms_error_m`` even when refused, ``iterations``
+    run, and ``matches``: per matched item, the names of the map features it matched."""
+
+    observation: PoseObservation | None
+    pose: FloatArray
+    rms_error_m: float
+    iterations: int
+    matches: tuple[tuple[str, ...], ...]
+
+
+def observe_pose(
+    features: Sequence[FieldFeature],
+    prior_pose: FloatArray,
+    field_map: FieldMap,
+    config: SensorModelConfig,
+) -> SensorModelResult:
+    """The pose observation of one frame's ``features`` from ``prior_pose`` (3,) (m, m, rad,
+    field frame) on ``field_map`` (module docstring)."""
+    pose = finite_vector(prior_pose, "prior_pose", 3)
+    if not isinstance(config, SensorModelConfig):
+        raise InvalidTypeError(f"config must be a SensorModelConfig, got {type(config).__name__}")
+    items = match_items(features, field_map, config)
+    if not items:
+        return SensorModelResult(None, pose, math.inf, 0, ())
+    errors: list[float] = []
+    chosen: list[tuple[MapFeature, ...]] = []
+    for iteration in range(1, config.max_iterations + 1):
+        included = items[: min(iteration, len(items))]
+        chosen = [_nearest(item, pose, config) for item in included]
+        pairs = _point_pairs(included, chosen, pose, config)
+        pose = _step(pose, pairs)
+        errors.append(_error(pose, _point_pairs(included, chosen, pose, config)))
+        if len(included) == len(items) and (
+            errors[-1] < config.converged_rms_m**2
+            or (len(errors) >= 3 and errors[-1] >= min(errors[-3], errors[-2]))
+        ):
+            break
+    rms = math.sqrt(errors[-1])
+    matches = tuple(tuple(m.name for m in c) for c in chosen)
+    if rms > config.accept_rms_m:
+        return SensorModelResult(None, pose, rms, iteration, matches)
+    information = _information(items, chosen, pose, config)
+    observation = PoseObservation(pose, information, rms, sum(len(i.features) for i in items))
+    return SensorModelResult(observation, pose, rms, iteration, matches)
+
+
+# ----- pre-processing ---------------------------------------------------------------------
+def match_items(
+    features: Sequence[FieldFeature], field_map: FieldMap, config: SensorModelConfig
+) -> list[MatchItem]:
+    """The features as match items in matching order (module docstring): pre-processed, the
+    field edges dropped, sorted by rank and then by distance."""
+    if isinstance(features, FieldFeature) or not isinstance(features, Sequence):
+        raise InvalidTypeError(
+            f"features must be a sequence of FieldFeature, got {type(features).__name__}"
+        )
+    for i, f in enumerate(features):
+        if not isinstance(f, FieldFeature):
+            raise InvalidTypeError(f"features[{i}] must be a FieldFeature, got {type(f).__name__}")
+    edges = [f for f in features if f.kind == "field_edge"]
+    posts = [f for f in features if f.kind == "goal_post"]
+    lines = [f for f in features if f.kind == "line"]
+    items: list[MatchItem] = []
+    paired_posts = _two_posts(posts, field_map, config)
+    items += paired_posts
+    used = {id(f) for item in paired_posts for f in item.features}
+    parallel = _parallel_lines(lines, field_map, config)
+    items += parallel
+    used |= {id(f) for item in parallel for f in item.features}
+    for f in features:
+        if f.kind == "field_edge" or id(f) in used:
+            continue
+        candidates: tuple[tuple[MapFeature, ...], ...] = tuple(
+            (m,) for m in field_map.of_kind(f.kind)
+        )
+        if f.kind == "t_junction":
+            candidates = _related(f, posts, "goal_post", candidates, field_map, config)
+        elif f.kind == "corner" or f.kind == "line":
+            candidates = _related(f, edges, "field_edge", candidates, field_map, config)
+        items.append(MatchItem(f.kind, (f,), candidates))
+    return sorted(items, key=lambda item: (RANKS[item.kind], item.distance_m))
+
+
+def _segment_angle(points: FloatArray) -> float:
+    d = points[1] - points[0]
+    return math.atan2(d[1], d[0])
+
+
+def _axial_difference(a: float, b: float) -> float:
+    """|a - b| modulo pi, in [0, pi/2]."""
+    return abs(float(wrap_angle(2.0 * (a - b)))) / 2.0
+
+
+def _line_gap(a: FloatArray, b: FloatArray) -> float:
+    """Distance (m) from the midpoint of segment ``b`` to the infinite line through ``a``."""
+    d = (a[1] - a[0]) / np.linalg.norm(a[1] - a[0])
+    offset = 0.5 * (b[0] + b[1]) - a[0]
+    return abs(float(d[0] * offset[1] - d[1] * offset[0]))
+
+
+def _two_posts(
+    posts: list[FieldFeature], field_map: FieldMap, config: SensorModelConfig
+) -> list[MatchItem]:
+    """The first pair of seen posts about a goal's width apart, as a two-posts item."""
+    width = float(np.linalg.norm(field_map.dims.goal_posts()[1] - field_map.dims.goal_posts()[0]))
+    map_posts = field_map.of_kind("goal_post")
+    for a, b in itertools.combinations(posts, 2):
+        gap = b.points[0] - a.points[0]
+        if abs(float(np.linalg.norm(gap)) - width) > config.relation_tolerance_m:
+            continue
+        # both orders of a goal's posts fit the pair; the one that puts the robot off the
+        # carpet (behind the goal) is no candidate
+        candidates = tuple(
+            (ma, mb)
+            for ma, mb in itertools.permutations(map_posts, 2)
+            if abs(float(np.linalg.norm(mb.points[0] - ma.points[0])) - width) < 1e-6
+            and _on_carpet(_implied_origin(a, b, ma, mb), field_map)
+        )
+        return [MatchItem("two_posts", (a, b), candidates)]
+    return []
+
+
+def _implied_origin(a: FieldFeature, b: FieldFeature, ma: MapFeature, mb: MapFeature) -> FloatArray:
+    """Where the robot stands (2,) if the seen points ``a``, ``b`` are the map's ``ma``, ``mb``."""
+    seen, mapped = b.points[0] - a.points[0], mb.points[0] - ma.points[0]
+    turn = math.atan2(mapped[1], mapped[0]) - math.atan2(seen[1], seen[0])
+    c, s = math.cos(turn), math.sin(turn)
+    return ma.points[0] - np.array([[c, -s], [s, c]]) @ a.points[0]
+
+
+def _on_carpet(point: FloatArray, field_map: FieldMap) -> bool:
+    dims = field_map.dims
+    return bool(
+        abs(point[0]) <= dims.half_length_m + dims.border_strip_m
+        and abs(point[1]) <= dims.half_width_m + dims.border_strip_m
+    )
+
+
+def _parallel_lines(
+    lines: list[FieldFeature], field_map: FieldMap, config: SensorModelConfig
+) -> list[MatchItem]:
+    """The first pair of seen parallel lines, with the map line pairs as far apart."""
+    map_lines = field_map.of_kind("line")
+    for a, b in itertools.combinations(lines, 2):
+        if _axial_difference(_segment_angle(a.points), _segment_angle(b.points)) > PARALLEL_RAD:
+            continue
+        gap = _line_gap(a.points, b.points)
+        candidates = tuple(
+            (ma, mb)
+            for ma, mb in itertools.permutations(map_lines, 2)
+            if _axial_difference(_segment_angle(ma.points), _segment_angle(mb.points)) < 1e-6
+            and abs(_line_gap(ma.points, mb.points) - gap) <= config.relation_tolerance_m
+        )
+        if candidates:
+            return [MatchItem("parallel_lines", (a, b), candidates)]
+    return []
+
+
+def _local(point: FloatArray, origin: FloatArray, direction: float) -> FloatArray:
+    """``point`` (2,) in the frame at ``origin`` (2,) turned by ``direction`` (rad)."""
+    c, s = math.cos(direction), math.sin(direction)
+    d = point - origin
+    return np.array([c * d[0] + s * d[1], -s * d[0] + c * d[1]])
+
+
+def _relation(feature: FieldFeature | MapFeature, other: FieldFeature | MapFeature) -> FloatArray:
+    """How ``other`` lies relative to ``feature``: a post's position in a junction's frame
+    (2,), or an edge's distance and direction from a corner or line (2,): (distance, angle)."""
+    if other.kind == "goal_post":  # beside a T junction, which always has a direction
+        return _local(other.points[0], feature.points[0], float(feature.direction or 0.0))
+    anchor = 0.5 * (feature.points[0] + feature.points[-1])
+    d = (other.points[1] - other.points[0]) / np.linalg.norm(other.points[1] - other.points[0])
+    offset = anchor - other.points[0]
+    distance = abs(float(d[0] * offset[1] - d[1] * offset[0]))
+    base = feature.direction if feature.direction is not None else _segment_angle(feature.points)
+    return np.array([distance, _axial_difference(math.atan2(d[1], d[0]), base)])
+
+
+def _related(
+    feature: FieldFeature,
+    references: list[FieldFeature],
+    reference_kind: FeatureKind,
+    candidates: tuple[tuple[MapFeature, ...], ...],
+    field_map: FieldMap,
+    config: SensorModelConfig,
+) -> tuple[tuple[MapFeature, ...], ...]:
+    """``candidates`` restricted to those with a map reference placed as a seen one is (the
+    seen references within ``relation_range_m`` of the feature; lines need a parallel edge)."""
+    near = [
+        r
+        for r in references
+        if _reference_distance(feature, r) <= config.relation_range_m
+        and (feature.kind != "line" or _relation(feature, r)[1] <= PARALLEL_RAD)
+    ]
+    if not near:
+        return candidates
+    map_references = field_map.of_kind(reference_kind)
+    scale = np.array([1.0, config.direction_scale_m_per_rad])
+    if reference_kind == "goal_post":
+        scale = np.ones(2)
+    kept = tuple(
+        c
+        for c in candidates
+        if all(
+            any(
+                np.linalg.norm((_relation(c[0], m) - _relation(feature, r)) * scale)
+                <= config.relation_tolerance_m
+                for m in map_references
+            )
+            for r in near
+        )
+    )
+    return kept
+
+
+def _reference_distance(feature: FieldFeature, reference: FieldFeature) -> float:
+    if reference.kind == "goal_post":
+        return float(np.linalg.norm(reference.points[0] - feature.points[0]))
+    return float(_relation(feature, reference)[0])
+
+
+# ----- matching and point pairs -----------------------------------------------------------
+def _place(pose: FloatArray, points: FloatArray) -> FloatArray:
+    """Robot-frame ``points`` (N, 2) in the field frame from ``pose`` (3,)."""
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    return points @ np.array([[c, s], [-s, c]]) + pose[:2]
+
+
+def _segment_distance(point: FloatArray, segment: FloatArray) -> float:
+    a, b = segment
+    t = float(np.clip((point - a) @ (b - a) / float((b - a) @ (b - a)), 0.0, 1.0))
+    return float(np.linalg.norm(point - (a + t * (b - a))))
+
+
+def _direction_gap(feature: FieldFeature, pose: FloatArray, target: MapFeature) -> float:
+    if feature.direction is None or target.direction is None:
+        return 0.0
+    placed = feature.direction + pose[2]
+    if feature.kind in AXIAL_KINDS:
+        return _axial_difference(placed, target.direction)
+    return abs(float(wrap_angle(placed - target.direction)))
+
+
+def _distance(
+    feature: FieldFeature, pose: FloatArray, target: MapFeature, config: SensorModelConfig
+) -> float:
+    placed = _place(pose, feature.points)
+    if feature.kind == "line":
+        return sum(_segment_distance(p, target.points) for p in placed)
+    position = float(np.linalg.norm(placed[0] - target.points[0]))
+    return position + config.direction_scale_m_per_rad * _direction_gap(feature, pose, target)
+
+
+def _nearest(
+    item: MatchItem, pose: FloatArray, config: SensorModelConfig
+) -> tuple[MapFeature, ...]:
+    def cost(candidate: tuple[MapFeature, ...]) -> float:
+        return sum(
+            _distance(f, pose, m, config) for f, m in zip(item.features, candidate, strict=True)
+        )
+
+    return min(item.candidates, key=cost)
+
+
+def _unit(angle: float) -> FloatArray:
+    return np.array([math.cos(angle), math.sin(angle)])
+
+
+@dataclass(frozen=True)
+class _Pair:
+    """A point pair: the feature's point ``robot`` (2,) (robot frame), its map target ``q``
+    (2,) (field frame), the counted components ``mask`` (2,) and the weight ``w``."""
+
+    robot: FloatArray
+    q: FloatArray
+    mask: FloatArray
+    w: float
+
+
+def _point_pairs(
+    items: list[MatchItem],
+    chosen: list[tuple[MapFeature, ...]],
+    pose: FloatArray,
+    config: SensorModelConfig,
+) -> list[_Pair]:
+    pairs: list[_Pair] = []
+    for item, targets in zip(items, chosen, strict=True):
+        for feature, target in zip(item.features, targets, strict=True):
+            w = _weight(feature, config)
+            if feature.kind == "line":
+                # lines run along x or y: count only the component across the line (eqs. 6-7)
+                mask = _across(target)
+                for end, placed in zip(feature.points, _place(pose, feature.points), strict=True):
+                    foot = placed * (1.0 - mask) + target.points[0] * mask
+                    pairs.append(_Pair(end, foot, mask, w))
+                continue
+            pairs.append(_Pair(feature.points[0], target.points[0], np.ones(2), w))
+            if feature.direction is not None and target.direction is not None:
+                arm = config.junction_arm_m
+                towards = target.direction
+                gap = abs(float(wrap_angle(feature.direction + pose[2] - towards)))
+                if feature.kind in AXIAL_KINDS and gap > math.pi / 2:
+                    towards += math.pi  # the map direction nearer the placed one
+                seen = feature.points[0] + arm * _unit(feature.direction)
+                pairs.append(_Pair(seen, target.points[0] + arm * _unit(towards), np.ones(2), w))
+    return pairs
+
+
+def _step(pose: FloatArray, pairs: list[_Pair]) -> FloatArray:
+    """One least-squares step (module docstring): the new pose."""
+    p = np.array([_place(pose, pair.robot[None])[0] for pair in pairs])
+    q = np.array([pair.q for pair in pairs])
+    masks = np.array([pair.mask for pair in pairs])
+    w = np.array([pair.w for pair in pairs])
+    centre = (w[:, None] * p).sum(axis=0) / w.sum()
+    rows, targets = [], []
+    for pi, qi, mi, wi in zip(p, q, masks, w, strict=True):
+        lever = _J @ (pi - centre)
+        for axis in (0, 1):
+            if mi[axis]:
+                unit = np.zeros(2)
+                unit[axis] = 1.0
+                rows.append(math.sqrt(wi) * np.array([unit[0], unit[1], lever[axis]]))
+                targets.append(math.sqrt(wi) * (qi[axis] - pi[axis]))
+    t_x, t_y, dtheta = np.linalg.lstsq(np.array(rows), np.array(targets), rcond=None)[0]
+    c, s = math.cos(dtheta), math.sin(dtheta)
+    turned = centre + np.array([[c, -s], [s, c]]) @ (pose[:2] - centre) + np.array([t_x, t_y])
+    return np.array([turned[0], turned[1], float(wrap_angle(pose[2] + dtheta))])
+
+
+def _error(pose: FloatArray, pairs: list[_Pair]) -> float:
+    """Weighted mean squared residual (m²) of the point pairs placed from ``pose`` (eq. 1,
+    counted components only)."""
+    p = _place(pose, np.array([pair.robot for pair in pairs]))
+    residual = np.array([pair.mask * (pair.q - pi) for pair, pi in zip(pairs, p, strict=True)])
+    w = np.array([pair.w for pair in pairs])
+    return float((w * (residual**2).sum(axis=1)).sum() / w.sum())
+
+
+def _information(
+    items: list[MatchItem],
+    chosen: list[tuple[MapFeature, ...]],
+    pose: FloatArray,
+    config: SensorModelConfig,
+) -> FloatArray:
+    """The pose's information (3, 3) at ``pose``: the pseudo-inverse of the weighted least
+    squares' covariance (module docstring)."""
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    turn = np.array([[c, -s], [s, c]])
+    rows: list[FloatArray] = []  # per counted row: d (row's coordinate) / d pose
+    weights: list[float] = []  # per row
+    sources: list[dict[int, float]] = []  # per row: its error's coefficient per noise source
+    noise: list[float] = []  # per independent noise source: its variance
+    for item, targets in zip(items, chosen, strict=True):
+        for feature, target in zip(item.features, targets, strict=True):
+            w = _weight(feature, config)
+            if feature.kind == "line":
+                normal = _across(target)
+                for end, cov in zip(feature.points, feature.cov, strict=True):
+                    rows.append(normal @ np.hstack([np.eye(2), (_J @ turn @ end)[:, None]]))
+                    weights.append(w)
+                    sources.append({len(noise): 1.0})
+                    noise.append(float(normal @ turn @ cov @ turn.T @ normal))
+                continue
+            # the vertex's error (two independent sources along the eigenvectors of its
+            # field-frame covariance) and, for a directed feature, the direction's
+            values, vectors = np.linalg.eigh(turn @ feature.cov[0] @ turn.T)
+            vertex = len(noise)
+            noise += [float(v) for v in values]
+            points = [feature.points[0]]
+            swing = np.zeros(2)
+            if feature.direction is not None and target.direction is not None:
+                arm = config.junction_arm_m * _unit(feature.direction)
+                points.append(feature.points[0] + arm)
+                swing = turn @ _J @ arm  # how the arm's point moves with the direction
+                noise.append(feature.direction_std**2)
+            for k, point in enumerate(points):
+                A = np.hstack([np.eye(2), (_J @ turn @ point)[:, None]])
+                for axis in (0, 1):
+                    rows.append(A[axis])
+                    weights.append(w)
+                    source = {vertex: float(vectors[axis, 0]), vertex + 1: float(vectors[axis, 1])}
+                    if k == 1:  # the arm's point: the direction's source, added after the vertex
+                        source[vertex + 2] = float(swing[axis])
+                    sources.append(source)
+    A = np.array(rows)
+    W = np.diag(weights)
+    B = np.zeros((len(rows), len(noise)))
+    for r, source in enumerate(sources):
+        for k, value in source.items():
+            B[r, k] = value
+    error_cov = B @ np.diag(noise) @ B.T
+    normal_inverse = np.linalg.pinv(A.T @ W @ A, rcond=1e-10, hermitian=True)
+    cov = normal_inverse @ A.T @ W @ error_cov @ W @ A @ normal_inverse
+    information = np.linalg.pinv(0.5 * (cov + cov.T), rcond=1e-10, hermitian=True)
+    return 0.5 * (information + information.T)
+
+
+def _weight(feature: FieldFeature, config: SensorModelConfig) -> float:
+    """A feature's pairs' weight: the inverse of its distance (m) from the robot."""
+    return 1.0 / max(feature.distance_m, config.min_weight_distance_m)
+
+
+def _across(target: MapFeature) -> FloatArray:
+    """The unit axis (2,) across a map line: y for a line along x, x for one along y."""
+    along = target.points[1] - target.points[0]
+    return np.array([0.0, 1.0]) if abs(along[0]) > abs(along[1]) else np.array([1.0, 0.0])

@@ -1,0 +1,211 @@
+"""The unified field-feature sensor model (seed 004 §2.2) on synthetic features at known poses:
+exact recovery without noise, what a line constrains, the matching order and the seed's
+pre-processing, refusal, and an information matrix that matches the estimator's scatter."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from perception.field.features import FieldFeature
+from perception.field.field_map import FieldMap, MapFeature
+from perception.field.sensor_model import SensorModelConfig, match_items, observe_pose
+from perception.geometry import wrap_angle
+
+FIELD = FieldMap()
+CONFIG = SensorModelConfig()
+POINT_STD_M = 0.02
+DIRECTION_STD_RAD = 0.03
+
+
+def named(name: str) -> MapFeature:
+    return next(f for f in FIELD.features if f.name == name)
+
+
+def to_robot(pose: np.ndarray, points: np.ndarray) -> np.ndarray:
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    return (np.asarray(points, dtype=float) - pose[:2]) @ np.array([[c, -s], [s, c]])
+
+
+def seen(
+    pose: np.ndarray,
+    name: str,
+    part: np.ndarray | None = None,
+    rng: np.random.Generator | None = None,
+    std: float = POINT_STD_M,
+) -> FieldFeature:
+    """The map feature ``name`` as the robot at ``pose`` sees it (``part``: a line's seen
+    stretch, field frame), with noise drawn from its covariance when ``rng`` is given."""
+    feature = named(name)
+    points = to_robot(pose, feature.points if part is None else part)
+    direction = None if feature.direction is None else feature.direction - pose[2]
+    if rng is not None:
+        points = points + rng.normal(0.0, std, points.shape)
+        if direction is not None:
+            direction += rng.normal(0.0, DIRECTION_STD_RAD)
+    cov = np.array([np.eye(2) * std**2] * len(points))
+    return FieldFeature(
+        feature.kind, points, cov, direction, math.nan if direction is None else DIRECTION_STD_RAD
+    )
+
+
+TRUTH = np.array([-2.0, 1.0, 0.3])
+
+
+def rich_view(
+    pose: np.ndarray = TRUTH, rng: np.random.Generator | None = None
+) -> list[FieldFeature]:
+    return [
+        seen(pose, "corner_penalty_area_-x_+y", rng=rng),
+        seen(pose, "goal_post_-x_+y", rng=rng),
+        seen(pose, "centre_circle", rng=rng),
+        seen(pose, "halfway_line", np.array([[0.0, -1.0], [0.0, 2.0]]), rng=rng),
+        seen(pose, "penalty_area_-x_side_+y", np.array([[-4.2, 2.0], [-3.2, 2.0]]), rng=rng),
+    ]
+
+
+def pose_error(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    d = a - b
+    d[2] = wrap_angle(d[2])
+    return d
+
+
+def test_noiseless_features_give_the_true_pose_from_nearby_priors() -> None:
+    rng = np.random.default_rng(0)
+    features = rich_view()
+    for _ in range(20):
+        prior = TRUTH + rng.uniform([-0.3, -0.3, -0.3], [0.3, 0.3, 0.3])
+        result = observe_pose(features, prior, FIELD, CONFIG)
+        assert result.observation is not None
+        np.testing.assert_allclose(pose_error(result.pose, TRUTH), 0.0, atol=1e-6)
+        assert result.rms_error_m < 1e-6
+
+
+@pytest.mark.parametrize(
+    ("name", "part", "free_axis"),
+    [
+        ("halfway_line", [[0.0, -1.0], [0.0, 2.0]], 1),  # along y: x and the heading
+        ("touch_line_+y", [[-3.0, 3.0], [-1.0, 3.0]], 0),  # along x: y and the heading
+    ],
+)
+def test_a_single_line_constrains_only_the_two_components_across_it(
+    name: str, part: list, free_axis: int
+) -> None:
+    features = [seen(TRUTH, name, np.array(part))]
+    fixed = [axis for axis in (0, 1, 2) if axis != free_axis]
+    prior = TRUTH + np.array([0.3, 0.4, 0.1])
+    result = observe_pose(features, prior, FIELD, CONFIG)
+    assert result.observation is not None
+    np.testing.assert_allclose(pose_error(result.pose, TRUTH)[fixed], 0.0, atol=1e-6)
+    # with the heading right, no turn about the line moves the robot along it: the line
+    # leaves that component as the prior had it
+    level = TRUTH + np.array([0.3, 0.4, 0.0])
+    moved = observe_pose(features, level, FIELD, CONFIG)
+    np.testing.assert_allclose(pose_error(moved.pose, TRUTH)[fixed], 0.0, atol=1e-6)
+    assert moved.pose[free_axis] == pytest.approx(level[free_axis], abs=1e-9)
+    information = result.observation.information
+    null = np.zeros(3)
+    null[free_axis] = 1.0
+    np.testing.assert_allclose(information @ null, 0.0, atol=1e-6)
+    assert np.linalg.matrix_rank(information, tol=1e-6 * np.abs(information).max()) == 2
+
+
+def test_items_are_matched_in_the_seeds_order_nearest_first_within_a_kind() -> None:
+    pose = np.array([3.0, 0.3, 0.1])  # before the +x goal, facing it
+    features = [
+        seen(pose, "halfway_line", np.array([[0.0, -1.0], [0.0, 1.0]])),
+        seen(pose, "centre_circle"),
+        seen(pose, "penalty_mark_+x"),
+        seen(pose, "t_junction_halfway_+y"),
+        seen(pose, "corner_goal_area_+x_+y"),
+        seen(pose, "corner_penalty_area_+x_+y"),
+        seen(pose, "goal_post_+x_-y"),
+        seen(pose, "goal_post_+x_+y"),
+        seen(pose, "goal_area_+x_front", np.array([[3.9, -1.0], [3.9, 1.0]])),
+        seen(pose, "penalty_area_+x_front", np.array([[2.85, -1.0], [2.85, 1.0]])),
+    ]
+    items = match_items(features, FIELD, CONFIG)
+    assert [item.kind for item in items] == [
+        "two_posts",
+        "parallel_lines",
+        "corner",
+        "corner",
+        "t_junction",
+        "penalty_mark",
+        "centre_circle",
+        "line",
+    ]
+    corners = [item.features[0].distance_m for item in items if item.kind == "corner"]
+    assert corners == sorted(corners)
+
+
+def test_two_posts_match_only_goal_orders_that_keep_the_robot_on_the_carpet() -> None:
+    pose = np.array([3.0, 0.3, 0.1])
+    features = [seen(pose, "goal_post_+x_-y"), seen(pose, "goal_post_+x_+y")]
+    (item,) = match_items(features, FIELD, CONFIG)
+    pairs = {tuple(m.name for m in c) for c in item.candidates}
+    # the seen order on either goal; the swapped orders would put the robot behind a goal
+    assert pairs == {("goal_post_+x_-y", "goal_post_+x_+y"), ("goal_post_-x_+y", "goal_post_-x_-y")}
+
+
+def test_a_t_junction_beside_a_post_matches_only_junctions_with_a_post_there() -> None:
+    pose = np.array([3.0, 0.3, 0.1])
+    features = [seen(pose, "t_junction_goal_area_+x_+y"), seen(pose, "goal_post_+x_+y")]
+    t_item = next(
+        item for item in match_items(features, FIELD, CONFIG) if item.kind == "t_junction"
+    )
+    names = {c[0].name for c in t_item.candidates}
+    assert names == {"t_junction_goal_area_+x_+y", "t_junction_goal_area_-x_-y"}
+
+
+def test_an_edge_beside_a_corner_or_a_line_keeps_only_outer_ones() -> None:
+    pose = np.array([3.5, 2.0, 0.6])
+    edge = seen(pose, "field_edge_+y", np.array([[2.5, 3.7], [5.0, 3.7]]))
+    corner = seen(pose, "corner_field_+x_+y")
+    line = seen(pose, "touch_line_+y", np.array([[2.0, 3.0], [4.0, 3.0]]))
+    items = match_items([edge, corner, line], FIELD, CONFIG)
+    by_kind = {item.kind: {c[0].name for c in item.candidates} for item in items}
+    assert by_kind["corner"] == {f.name for f in FIELD.of_kind("corner") if "field" in f.name}
+    assert by_kind["line"] == {"touch_line_-y", "touch_line_+y", "goal_line_-x", "goal_line_+x"}
+    assert "field_edge" not in by_kind  # the edges only sort the others
+
+
+def test_features_that_do_not_fit_together_are_refused() -> None:
+    features = rich_view()
+    post = features[1]
+    features[1] = FieldFeature("goal_post", post.points + np.array([[1.0, 0.0]]), post.cov)
+    result = observe_pose(features, TRUTH, FIELD, CONFIG)
+    assert result.observation is None
+    assert result.rms_error_m > CONFIG.accept_rms_m
+
+
+def test_the_information_matches_the_estimators_scatter() -> None:
+    rng = np.random.default_rng(3)
+    errors, information = [], None
+    for _ in range(300):
+        result = observe_pose(rich_view(rng=rng), TRUTH, FIELD, CONFIG)
+        assert result.observation is not None
+        errors.append(pose_error(result.pose, TRUTH))
+        information = result.observation.information
+    errors = np.array(errors)
+    nees = np.einsum("ni,ij,nj->n", errors, information, errors)
+    # mean NEES of 300 runs, 3 dof: 3 with a standard error of sqrt(6 / 300) = 0.14
+    assert 2.55 < nees.mean() < 3.45
+
+
+def test_bad_arguments_are_refused() -> None:
+    with pytest.raises(TypeError, match="features"):
+        observe_pose(rich_view()[0], TRUTH, FIELD, CONFIG)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="prior_pose"):
+        observe_pose(rich_view(), np.array([0.0, np.nan, 0.0]), FIELD, CONFIG)
+    with pytest.raises(ValueError, match="accept_rms_m"):
+        SensorModelConfig(accept_rms_m=0.0)
+    with pytest.raises(ValueError, match="max_iterations"):
+        SensorModelConfig(max_iterations=0)
+
+
+def test_no_features_give_no_observation() -> None:
+    result = observe_pose([], TRUTH, FIELD, CONFIG)
+    assert result.observation is None and result.iterations == 0
