@@ -201,7 +201,7 @@ def check_covariance(
     if C.shape != (size, size) or not np.isfinite(C).all():
         raise ValueError(f"{name} must be a finite ({size}, {size}) array, got {C!r}")
     if singular_ok:
-        tolerance = _SYMMETRY_RTOL * np.maximum(np.abs(C), np.abs(C.T))
+        tolerance = _SYMMETRY_RTOL * np.maximum(np.abs(C), np.abs(C.T)) + _SYMMETRY_ATOL
         if not (np.abs(C - C.T) <= tolerance).all():
             raise ValueError(f"{name} must be symmetric, got {C.tolist()}")
         C = 0.5 * (C + C.T)

@@ -31,7 +31,9 @@ subspace ``L`` informs (``e^T (P + L^-1)^-1 e`` when ``L`` is invertible); for a
 observation it is chi-square distributed with ``rank(L)`` degrees of freedom, so an
 observation is refused when ``d²`` exceeds that chi-square quantile at
 ``PoseFilterConfig.gate_probability``. A residual along an uninformed direction (the position
-along a seen line) neither moves the estimate nor counts against the gate.
+along a seen line) neither moves the estimate nor counts against the gate. A gate refuses
+most often when the estimate is far off, so it leaves the filter slightly overconfident: at
+p = 0.99 the mean NEES of the tests' simulation is about 3 % above its 3 dof.
 
 **The field's half-turn symmetry** (seed 004 §2.3-2.4: field features cannot tell one end of
 the field from the other) is not modelled here. The sensor model converges to the pose, or to

@@ -8,7 +8,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from perception.geometry import FloatArray, wrap_angle
-from perception.validation import InvalidTypeError, check_covariance, finite_vector
+from perception.validation import (
+    InvalidTypeError,
+    check_covariance,
+    check_positive,
+    finite_vector,
+)
 
 
 @dataclass(frozen=True, eq=False)
@@ -33,10 +38,7 @@ class PoseObservation:
         information = check_covariance(
             self.information, "PoseObservation.information", 3, singular_ok=True
         )
-        if not (np.isfinite(self.rms_error_m) and self.rms_error_m >= 0):
-            raise ValueError(
-                f"PoseObservation.rms_error_m must be finite and >= 0, got {self.rms_error_m!r}"
-            )
+        check_positive("PoseObservation", "rms_error_m", self.rms_error_m, allow_zero=True)
         if isinstance(self.features, bool) or not isinstance(self.features, (int, np.integer)):
             raise InvalidTypeError(
                 f"PoseObservation.features must be an int, got {type(self.features).__name__}"

@@ -58,6 +58,7 @@ import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -65,9 +66,17 @@ from perception.field.features import AXIAL_KINDS, FeatureKind, FieldFeature
 from perception.field.field_map import FieldMap, MapFeature
 from perception.field.pose_observation import PoseObservation
 from perception.geometry import FloatArray, wrap_angle
-from perception.validation import InvalidTypeError, check_int, check_positive, finite_vector
+from perception.validation import (
+    InvalidTypeError,
+    check_choice,
+    check_int,
+    check_positive,
+    finite_vector,
+)
 
 _J = np.array([[0.0, -1.0], [1.0, 0.0]])  # a quarter turn: d Rot(a) / da at a = 0
+MatchOrder = Literal["seed", "candidates"]
+MATCH_ORDERS: tuple[MatchOrder, ...] = ("seed", "candidates")
 PARALLEL_RAD = math.radians(10.0)  # two lines within this of each other are parallel
 RIGHT_ANGLE_TOLERANCE_RAD = math.radians(15.0)
 
@@ -92,7 +101,10 @@ class SensorModelConfig:
     ``direction_scale_m_per_rad`` (m/rad): a direction difference's weight in the matching
     distance, the seed's "arbitrary scaling factor"; ``junction_arm_m`` (m); ``relation_range_m``
     (m) and ``relation_tolerance_m`` (m): pre-processing; ``min_weight_distance_m`` (m);
-    ``max_iterations`` (int >= 1); ``converged_rms_m`` and ``accept_rms_m`` (m).
+    ``max_iterations`` (int >= 1); ``converged_rms_m`` and ``accept_rms_m`` (m); ``order``:
+    ``"seed"`` (the seed's ranks, :data:`RANKS`) or ``"candidates"`` (the items with the
+    fewest map candidates left by the pre-processing first, the seed's ranks breaking ties:
+    distinctiveness measured on this field rather than listed for the seed's).
     """
 
     direction_scale_m_per_rad: float = 0.5
@@ -103,6 +115,7 @@ class SensorModelConfig:
     max_iterations: int = 30
     converged_rms_m: float = 1e-6
     accept_rms_m: float = 0.15
+    order: MatchOrder = "seed"
 
     def __post_init__(self) -> None:
         owner = "SensorModelConfig"
@@ -117,6 +130,7 @@ class SensorModelConfig:
         ):
             check_positive(owner, name, getattr(self, name))
         check_int(owner, "max_iterations", self.max_iterations, 1)
+        check_choice(owner, "order", self.order, MATCH_ORDERS)
 
 
 @dataclass(frozen=True, eq=False)
@@ -189,7 +203,7 @@ def match_items(
     features: Sequence[FieldFeature], field_map: FieldMap, config: SensorModelConfig
 ) -> list[MatchItem]:
     """The features as match items in matching order (module docstring): pre-processed, the
-    field edges dropped, sorted by rank and then by distance."""
+    field edges dropped, sorted by ``config.order`` and then by distance."""
     if isinstance(features, FieldFeature) or not isinstance(features, Sequence):
         raise InvalidTypeError(
             f"features must be a sequence of FieldFeature, got {type(features).__name__}"
@@ -199,7 +213,8 @@ def match_items(
             raise InvalidTypeError(f"features[{i}] must be a FieldFeature, got {type(f).__name__}")
     edges = [f for f in features if f.kind == "field_edge"]
     posts = [f for f in features if f.kind == "goal_post"]
-    lines = [f for f in features if f.kind == "line"]
+    lines = _merged_lines([f for f in features if f.kind == "line"], config)
+    features = [f for f in features if f.kind != "line"] + lines
     items: list[MatchItem] = []
     paired_posts = _two_posts(posts, field_map, config)
     items += paired_posts
@@ -218,6 +233,10 @@ def match_items(
         elif f.kind == "corner" or f.kind == "line":
             candidates = _related(f, edges, "field_edge", candidates, field_map, config)
         items.append(MatchItem(f.kind, (f,), candidates))
+    if config.order == "candidates":
+        return sorted(
+            items, key=lambda item: (len(item.candidates), RANKS[item.kind], item.distance_m)
+        )
     return sorted(items, key=lambda item: (RANKS[item.kind], item.distance_m))
 
 
@@ -285,6 +304,8 @@ def _parallel_lines(
         if _axial_difference(_segment_angle(a.points), _segment_angle(b.points)) > PARALLEL_RAD:
             continue
         gap = _line_gap(a.points, b.points)
+        if gap <= config.relation_tolerance_m:
+            continue  # one line (or two collinear ones), not a parallel pair
         candidates = tuple(
             (ma, mb)
             for ma, mb in itertools.permutations(map_lines, 2)
@@ -294,6 +315,40 @@ def _parallel_lines(
         if candidates:
             return [MatchItem("parallel_lines", (a, b), candidates)]
     return []
+
+
+def _merged_lines(lines: list[FieldFeature], config: SensorModelConfig) -> list[FieldFeature]:
+    """``lines`` with collinear ones merged (within ``PARALLEL_RAD`` and with each one's middle
+    within ``relation_tolerance_m`` of the other's line): the stretches of one line that the
+    two cameras, or two pieces of one image, saw. A merged line spans the outermost ends."""
+    merged = list(lines)
+    joined = True
+    while joined:
+        joined = False
+        for i, j in itertools.combinations(range(len(merged)), 2):
+            a, b = merged[i], merged[j]
+            collinear = (
+                _axial_difference(_segment_angle(a.points), _segment_angle(b.points))
+                <= PARALLEL_RAD
+                and _line_gap(a.points, b.points) <= config.relation_tolerance_m
+                and _line_gap(b.points, a.points) <= config.relation_tolerance_m
+            )
+            if collinear:
+                merged[i] = _span(a, b)
+                del merged[j]
+                joined = True
+                break
+    return merged
+
+
+def _span(a: FieldFeature, b: FieldFeature) -> FieldFeature:
+    """The line through the outermost of ``a``'s and ``b``'s ends (with their covariances)."""
+    ends = np.concatenate([a.points, b.points])
+    covs = np.concatenate([a.cov, b.cov])
+    along = a.points[1] - a.points[0]
+    t = ends @ along
+    first, last = int(np.argmin(t)), int(np.argmax(t))
+    return FieldFeature("line", ends[[first, last]], covs[[first, last]])
 
 
 def _local(point: FloatArray, origin: FloatArray, direction: float) -> FloatArray:
@@ -350,7 +405,7 @@ def _related(
             for r in near
         )
     )
-    return kept
+    return kept or candidates  # no map feature fits the relation: noise or a false detection
 
 
 def _reference_distance(feature: FieldFeature, reference: FieldFeature) -> float:

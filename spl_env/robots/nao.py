@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Literal
 
 import numpy as np
 
@@ -42,6 +43,8 @@ class RobotConfig:
     camera_offset_m: tuple[float, float, float] = (0.0587, 0.0, 0.0636)  # top camera in head frame
     head_pitch_joint_offset_m: float = 0.017  # HeadPitch above HeadYaw
     camera_tilt_rad: float = math.radians(1.2)  # Nao v6 top camera tilt in the head
+    bottom_camera_offset_m: tuple[float, float, float] = (0.0506, 0.0, 0.0179)  # in head frame
+    bottom_camera_tilt_rad: float = math.radians(39.7)  # Nao v6 bottom camera tilt in the head
     gait_frequency_hz: float = 1.6  # full gait cycles per second while walking
     sway_roll_rad: float = 0.035  # torso roll amplitude at full walking speed
     sway_pitch_rad: float = 0.012  # torso pitch amplitude at full walking speed
@@ -75,17 +78,35 @@ class RobotConfig:
                 "RobotConfig needs -pi/2 < head_pitch_min_rad < 0 < head_pitch_max_rad < pi/2, got "
                 f"{self.head_pitch_min_rad} and {self.head_pitch_max_rad}"
             )
-        if len(self.camera_offset_m) != 3 or not all(map(math.isfinite, self.camera_offset_m)):
-            raise ValueError(
-                f"RobotConfig.camera_offset_m must be 3 finite values, got {self.camera_offset_m}"
-            )
-        for name in ("head_pitch_joint_offset_m", "camera_tilt_rad"):
+        for name in ("camera_offset_m", "bottom_camera_offset_m"):
+            offset = getattr(self, name)
+            if len(offset) != 3 or not all(map(math.isfinite, offset)):
+                raise ValueError(f"RobotConfig.{name} must be 3 finite values, got {offset}")
+        for name in ("head_pitch_joint_offset_m", "camera_tilt_rad", "bottom_camera_tilt_rad"):
             if not math.isfinite(getattr(self, name)):
                 raise ValueError(f"RobotConfig.{name} must be finite, got {getattr(self, name)}")
         for name in ("sway_roll_rad", "sway_pitch_rad", "sway_bob_m"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):
                 raise ValueError(f"RobotConfig.{name} must be finite and >= 0, got {value}")
+
+
+def camera_state_for(
+    config: RobotConfig, head: FloatArray, camera: Literal["top", "bottom"] = "top"
+) -> CameraState:
+    """Where the ``camera`` (top or bottom) of a standing Nao with ``config`` is, robot frame,
+    at the head joint angles ``head`` (2,) (yaw, pitch; rad)."""
+    head_rot = rot_z(head[0]) @ rot_y(head[1])
+    neck = np.array([0.0, 0.0, config.head_yaw_joint_height_m])
+    pitch_joint = neck + rot_z(head[0]) @ np.array([0.0, 0.0, config.head_pitch_joint_offset_m])
+    top = camera == "top"
+    offset = config.camera_offset_m if top else config.bottom_camera_offset_m
+    return CameraState(
+        position=pitch_joint + head_rot @ np.asarray(offset),
+        head_yaw=float(head[0]),
+        head_pitch=float(head[1]),
+        tilt=config.camera_tilt_rad if top else config.bottom_camera_tilt_rad,
+    )
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -282,19 +303,7 @@ class NaoRobot:
 
     def camera_state(self) -> CameraState:
         """The camera pose the robot's joint sensors report (no sway): robot frame."""
-        cfg = self.config
-        head_rot = rot_z(self.head[0]) @ rot_y(self.head[1])
-        neck = np.array([0.0, 0.0, cfg.head_yaw_joint_height_m])
-        pitch_joint = neck + rot_z(self.head[0]) @ np.array(
-            [0.0, 0.0, cfg.head_pitch_joint_offset_m]
-        )
-        position = pitch_joint + head_rot @ np.asarray(cfg.camera_offset_m)
-        return CameraState(
-            position=position,
-            head_yaw=float(self.head[0]),
-            head_pitch=float(self.head[1]),
-            tilt=cfg.camera_tilt_rad,
-        )
+        return camera_state_for(self.config, self.head)
 
     def camera_pose_world(self) -> tuple[FloatArray, FloatArray]:
         """True camera position (3,) and rotation (3, 3) in the field frame, sway included."""
