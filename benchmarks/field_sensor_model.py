@@ -9,13 +9,13 @@ ignored, noise of its default configuration, which is not fitted to a detector).
 
 1. **Table 1 analogue**: the share of poses at which each kind is seen, and the pre-processed
    items (two goal posts, parallel lines).
-2. **Area of convergence** at the poses with several features (items) in view: the sensor
-   model started from every position of a 0.5 m grid over the field (the lines included) with
-   the true heading turned by +-15, 30, 45 and 90 degrees, one noisy draw of the features per
-   start; the share of starts that end within 10 cm and 10 degrees of the truth. A pose is
-   *localised from one observation* when that share at 90 degrees is at least 45 % (the
-   seed's "close to 50 %": the field's half-turn symmetry sends about half of those starts to
-   the twin pose), the threshold set before any run.
+2. **Area of convergence** at the poses with several features (items) in view: the sensor model
+   started from every position of a 0.5 m grid (``--grid``) over the field (the lines included)
+   with the true heading turned by +-15, 30, 45 and 90 degrees, one noisy draw of the features
+   per start; the share of starts that end within 10 cm and 10 degrees of the truth. A pose is
+   *localised from one observation* when that share at 90 degrees is at least 45 % (the seed's
+   "close to 50 %": the field's half-turn symmetry sends about half of those starts to the twin
+   pose), the threshold set before any run.
 3. **Positioning error**: the mean position error (m) of the converged starts, per pose and
    over all.
 
@@ -47,7 +47,6 @@ from spl_env.robots.nao import RobotConfig, camera_state_for
 
 RESULTS = Path("benchmarks/results")
 HEADING_ERRORS_DEG = (15, 30, 45, 90)
-GRID_M = 0.5
 CONVERGED_M, CONVERGED_RAD = 0.10, math.radians(10.0)
 ONE_OBSERVATION_SHARE = 0.45
 KINDS = (
@@ -97,11 +96,11 @@ def noisy(features: list[FieldFeature], rng: np.random.Generator) -> list[FieldF
     return drawn
 
 
-def start_grid(field_map: FieldMap) -> FloatArray:
-    """Start positions (N, 2): a 0.5 m grid over the field, its lines included."""
+def start_grid(field_map: FieldMap, spacing_m: float) -> FloatArray:
+    """Start positions (N, 2): a grid of ``spacing_m`` over the field, its lines included."""
     dims = field_map.dims
-    xs = np.arange(-dims.half_length_m, dims.half_length_m + 1e-9, GRID_M)
-    ys = np.arange(-dims.half_width_m, dims.half_width_m + 1e-9, GRID_M)
+    xs = np.arange(-dims.half_length_m, dims.half_length_m + 1e-9, spacing_m)
+    ys = np.arange(-dims.half_width_m, dims.half_width_m + 1e-9, spacing_m)
     return np.array([(x, y) for x in xs for y in ys])
 
 
@@ -111,9 +110,10 @@ def convergence(
     head_pitch_rad: float,
     rng: np.random.Generator,
     config: SensorModelConfig,
+    grid_m: float,
 ) -> dict[str, Any]:
     """Area of convergence and positioning error at one pose."""
-    grid = start_grid(field_map)
+    grid = start_grid(field_map, grid_m)
     exact = seen_features(pose, field_map, head_pitch_rad, None)
     shares, errors = {}, []
     for degrees in HEADING_ERRORS_DEG:
@@ -146,6 +146,8 @@ def main() -> None:
     parser.add_argument("--head-pitch-deg", type=float, default=10.0)
     parser.add_argument("--features", choices=("ideal",), default="ideal")
     parser.add_argument("--order", choices=("seed", "candidates"), default="seed")
+    parser.add_argument("--starts", choices=("prior", "hypotheses"), default="prior")
+    parser.add_argument("--grid", type=float, default=0.5, help="start grid spacing (m)")
     parser.add_argument("--out", type=Path, default=RESULTS)
     args = parser.parse_args()
     t0 = time.perf_counter()
@@ -153,7 +155,7 @@ def main() -> None:
     rng = np.random.default_rng(args.seed)
     pitch = math.radians(args.head_pitch_deg)
     poses = draw_poses(args.poses, rng, field_map)
-    config = SensorModelConfig(order=args.order)
+    config = SensorModelConfig(order=args.order, starts=args.starts)
     records, incidence = [], Counter()
     for index, pose in enumerate(poses):
         features = seen_features(pose, field_map, pitch, None)
@@ -166,7 +168,7 @@ def main() -> None:
             "items": len(items),
         }
         if len(items) >= 2:
-            record |= convergence(pose, field_map, pitch, rng, config)
+            record |= convergence(pose, field_map, pitch, rng, config, args.grid)
         records.append(record)
         print(f"pose {index}: {len(items)} items, {record.get('share_converged')}", flush=True)
     multi = [r for r in records if r["items"] >= 2]
@@ -176,7 +178,9 @@ def main() -> None:
         "seed": args.seed,
         "features": args.features,
         "order": args.order,
+        "starts": args.starts,
         "head_pitch_deg": args.head_pitch_deg,
+        "grid_m": args.grid,
         "incidence": {kind: incidence[kind] / len(poses) for kind in KINDS},
         "multi_feature_poses": len(multi),
         "single_item_poses": sum(r["items"] == 1 for r in records),
@@ -191,7 +195,7 @@ def main() -> None:
         "seconds": time.perf_counter() - t0,
     }
     args.out.mkdir(parents=True, exist_ok=True)
-    stem = f"field_sensor_model_{args.features}_{args.order}"
+    stem = f"field_sensor_model_{args.features}_{args.order}_{args.starts}"
     (args.out / f"{stem}.json").write_text(json.dumps(result, indent=1))
     (args.out / f"{stem}.md").write_text(markdown(result))
     print(markdown(result))

@@ -14,6 +14,8 @@ Provider choice, by representation (:data:`PROVIDERS`; the defaults of
                                               │
     odometry_delta ───────────────────────────┼──► self_pose [ekf_slam | oracle] ──┐
     odometry_delta, laser ──► self_pose [circle_slam]
+    image ──► field_features [vision | oracle] ──► self_pose [field_features]
+                                  └──► field_feature_last_seen [history]
                   └──► odometry_pose            └──► pole_last_seen [history]     │
     image, sonar_observations ──► robot_sightings [vision] ──┐                     │
     image ──► robot_sightings [vision_only]                  ├──► robot_tracks [tracker]
@@ -36,10 +38,19 @@ import numpy as np
 
 from perception.circles.circle_map import CircleMapConfig
 from perception.circles.scan_circles import ScanCirclesConfig
+from perception.field.pose_filter import PoseFilterConfig
+from perception.field.sensor_model import SensorModelConfig
+from perception.field.visibility import FeatureViewConfig
 from perception.geometry import FloatArray
 from perception.providers.base import PerceptionContext, Provider
 from perception.providers.circle_slam import CircleSlamProvider, SlamCircleMap
 from perception.providers.circles import LaserCircleMap
+from perception.providers.field import (
+    FieldFeatureHistory,
+    FieldFeaturePose,
+    OracleFieldFeatures,
+    VisionFieldFeatures,
+)
 from perception.providers.odometry import DeadReckoning
 from perception.providers.oracles import (
     OracleConfig,
@@ -63,6 +74,8 @@ from perception.providers.robots import (
 from perception.providers.slam import EkfSlamProvider
 from perception.representations import (
     CIRCLE_MAP,
+    FIELD_FEATURE_LAST_SEEN,
+    FIELD_FEATURES,
     FRAME_INPUTS,
     IMAGE_DETECTIONS,
     ODOMETRY_POSE,
@@ -85,6 +98,7 @@ from perception.validation import check_choice, check_in_interval
 from perception.vision.cnn_detector import CnnDetectorConfig
 from perception.vision.cnn_robots import CnnRobotConfig
 from perception.vision.colour_filter import ColourFilterConfig
+from perception.vision.field_features import FieldFeatureConfig
 from perception.vision.robots import RobotDetectorConfig
 
 ProviderFactory = Callable[["PipelineConfig", PerceptionContext], Provider]
@@ -103,6 +117,7 @@ PROVIDERS: Mapping[str, Mapping[str, ProviderFactory]] = {
         "ekf_slam": lambda c, ctx: EkfSlamProvider(c.slam),
         "oracle": lambda c, ctx: OracleSelfPose(c.oracle),
         "circle_slam": lambda c, ctx: CircleSlamProvider(c.circle_slam, c.scan_circles),
+        "field_features": lambda c, ctx: FieldFeaturePose(c.sensor_model, c.pose_filter, ctx),
     },
     ROBOT_SIGHTINGS: {
         "vision": lambda c, ctx: VisionRobotSightings(c.vision_robots, c.sonar_filter, ctx),
@@ -112,6 +127,11 @@ PROVIDERS: Mapping[str, Mapping[str, ProviderFactory]] = {
     },
     SONAR_OBSERVATIONS: {"filter": lambda c, ctx: FilteredSonar(c.sonar_filter)},
     ROBOT_TRACKS: {"tracker": lambda c, ctx: TrackedRobots(c.robot_tracker)},
+    FIELD_FEATURE_LAST_SEEN: {"history": lambda c, ctx: FieldFeatureHistory()},
+    FIELD_FEATURES: {
+        "vision": lambda c, ctx: VisionFieldFeatures(c.field_detector, ctx),
+        "oracle": lambda c, ctx: OracleFieldFeatures(c.feature_view, ctx),
+    },
     CIRCLE_MAP: {
         "laser": lambda c, ctx: LaserCircleMap(c.circle_mapper),
         "slam": lambda c, ctx: _slam_circle_map(c),
@@ -171,6 +191,17 @@ class PipelineConfig:
     circle_slam: CircleSlamConfig = field(default_factory=CircleSlamConfig)
     scan_circles: ScanCirclesConfig = field(default_factory=ScanCirclesConfig)
     oracle: OracleConfig = field(default_factory=OracleConfig)
+    # self_pose="field_features": the pose filter on the unified sensor model's observations
+    # of the frame's field features (seed 004 ch. 2), the map being the known field
+    field_features: str = "vision"  # one of PROVIDERS["field_features"]
+    # PyBullet draws its images one row above the pinhole model (CameraModel's docstring,
+    # tests/spl_env/test_world.py): unmoved, every ground point reads too far (5 cm at 3 m)
+    field_detector: FieldFeatureConfig = field(
+        default_factory=lambda: FieldFeatureConfig(row_offset_px=1.0)
+    )
+    feature_view: FeatureViewConfig = field(default_factory=FeatureViewConfig)
+    sensor_model: SensorModelConfig = field(default_factory=SensorModelConfig)
+    pose_filter: PoseFilterConfig = field(default_factory=PoseFilterConfig)
 
     def __post_init__(self) -> None:
         for representation in PROVIDERS:

@@ -24,6 +24,10 @@ name                   value
 ``robot_tracks``       ``tuple[RobotTrack, ...]``: tracked robots (field frame)
 ``circle_map``         ``tuple[MappedCircle, ...]``: static circles mapped from laser
                        scans (field frame), by id
+``field_features``     ``tuple[FieldFeature, ...]``: this frame's field lines, junctions,
+                       centre circle, marks, posts and edges (robot frame)
+``field_feature_last_seen``  ``Mapping[str, float]``: feature kind -> time (s) one was
+                       last seen
 =====================  ================================================================
 """
 
@@ -47,6 +51,8 @@ ROBOT_SIGHTINGS = "robot_sightings"
 SONAR_OBSERVATIONS = "sonar_observations"
 ROBOT_TRACKS = "robot_tracks"
 CIRCLE_MAP = "circle_map"
+FIELD_FEATURES = "field_features"
+FIELD_FEATURE_LAST_SEEN = "field_feature_last_seen"
 REPRESENTATIONS = (
     ODOMETRY_POSE,
     IMAGE_DETECTIONS,
@@ -57,6 +63,8 @@ REPRESENTATIONS = (
     SONAR_OBSERVATIONS,
     ROBOT_TRACKS,
     CIRCLE_MAP,
+    FIELD_FEATURES,
+    FIELD_FEATURE_LAST_SEEN,
 )
 
 # the SensorFrame fields a provider may read (all but its time and the emulated representations)

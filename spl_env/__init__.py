@@ -12,6 +12,12 @@ from __future__ import annotations
 
 from gymnasium.envs.registration import register, registry
 
+# the SPL ids that also come without poles, localising from the field's own features
+_NO_POLES = {
+    "SPL/ActiveVision-NoPoles-v1": "SPL/ActiveVision-v1",
+    "SPL/LookAround-NoPoles-v0": "SPL/LookAround-v0",
+}
+NO_POLES_KWARGS = {"scene.poles_enabled": False, "self_pose": "field_features"}
 _ENTRY_POINTS = {
     "SPL/ActiveVision-v0": "spl_env.envs.active_vision:ActiveVisionEnv",
     "SPL/ActiveVision-v1": "spl_env.envs.active_vision_robots:ActiveVisionRobotsEnv",
@@ -19,12 +25,20 @@ _ENTRY_POINTS = {
     "Circles/Office-v0": "spl_env.envs.circles:OfficeEnv",
     "Circles/Backyard-v0": "spl_env.envs.circles:BackyardEnv",
 }
-ENV_IDS: tuple[str, ...] = tuple(_ENTRY_POINTS)
+ENV_IDS: tuple[str, ...] = (*_ENTRY_POINTS, *_NO_POLES)
 SPL_ENV_IDS: tuple[str, ...] = tuple(i for i in ENV_IDS if i.startswith("SPL/"))  # Naos, field
 CIRCLES_ENV_IDS: tuple[str, ...] = tuple(i for i in ENV_IDS if i.startswith("Circles/"))
 
 for _env_id, _entry_point in _ENTRY_POINTS.items():
     if _env_id not in registry:
         register(id=_env_id, entry_point=_entry_point, max_episode_steps=None)
+for _env_id, _with_poles in _NO_POLES.items():
+    if _env_id not in registry:
+        register(
+            id=_env_id,
+            entry_point=_ENTRY_POINTS[_with_poles],
+            max_episode_steps=None,
+            kwargs=NO_POLES_KWARGS,
+        )
 
 __all__ = ["CIRCLES_ENV_IDS", "ENV_IDS", "SPL_ENV_IDS"]

@@ -34,6 +34,7 @@ SPL_ALIASES: dict[str, str] = {
     "laser": "sensors.laser",
     "frontend": "perception.pole_sightings",
     "self_pose": "perception.self_pose",
+    "field_features": "perception.field_features",
     "backend": "perception.slam.backend",
     "min_views": "perception.slam.min_views",
     "gate": "perception.slam.gate",
@@ -115,8 +116,9 @@ class EnvConfig(CoreConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if not self.scene.poles_enabled:
+        if not self.scene.poles_enabled and self.perception.self_pose == "ekf_slam":
             raise ValueError(
-                "EnvConfig.scene.poles_enabled must be True: the SPL envs map the poles"
+                "EnvConfig.scene.poles_enabled=False needs a self pose that does not map the "
+                "poles: perception.self_pose='field_features' (or 'oracle'), got 'ekf_slam'"
             )
         check_int("EnvConfig", "observed_circles", self.observed_circles, 1)

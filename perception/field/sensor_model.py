@@ -77,6 +77,9 @@ from perception.validation import (
 _J = np.array([[0.0, -1.0], [1.0, 0.0]])  # a quarter turn: d Rot(a) / da at a = 0
 MatchOrder = Literal["seed", "candidates"]
 MATCH_ORDERS: tuple[MatchOrder, ...] = ("seed", "candidates")
+Starts = Literal["prior", "hypotheses"]
+STARTS: tuple[Starts, ...] = ("prior", "hypotheses")
+_SAME_FIT_M = 1e-4  # runs whose RMS errors differ by less fit equally well
 PARALLEL_RAD = math.radians(10.0)  # two lines within this of each other are parallel
 RIGHT_ANGLE_TOLERANCE_RAD = math.radians(15.0)
 
@@ -104,7 +107,12 @@ class SensorModelConfig:
     ``max_iterations`` (int >= 1); ``converged_rms_m`` and ``accept_rms_m`` (m); ``order``:
     ``"seed"`` (the seed's ranks, :data:`RANKS`) or ``"candidates"`` (the items with the
     fewest map candidates left by the pre-processing first, the seed's ranks breaking ties:
-    distinctiveness measured on this field rather than listed for the seed's).
+    distinctiveness measured on this field rather than listed for the seed's); ``starts``:
+    ``"prior"`` (the seed's: one ICP from the prior pose) or ``"hypotheses"`` (also one ICP
+    from each pose that puts an item fixing the pose alone, a junction with its direction or
+    two posts, on one of its candidates; the best fit wins, and of equal fits, the field's
+    twins, the one nearest the prior: a hypothesis per candidate, as the field's repeated
+    features ask for).
     """
 
     direction_scale_m_per_rad: float = 0.5
@@ -116,6 +124,7 @@ class SensorModelConfig:
     converged_rms_m: float = 1e-6
     accept_rms_m: float = 0.15
     order: MatchOrder = "seed"
+    starts: Starts = "prior"
 
     def __post_init__(self) -> None:
         owner = "SensorModelConfig"
@@ -131,6 +140,7 @@ class SensorModelConfig:
             check_positive(owner, name, getattr(self, name))
         check_int(owner, "max_iterations", self.max_iterations, 1)
         check_choice(owner, "order", self.order, MATCH_ORDERS)
+        check_choice(owner, "starts", self.starts, STARTS)
 
 
 @dataclass(frozen=True, eq=False)
@@ -176,26 +186,60 @@ def observe_pose(
     items = match_items(features, field_map, config)
     if not items:
         return SensorModelResult(None, pose, math.inf, 0, ())
+    starts = [pose]
+    if config.starts == "hypotheses":
+        fixing = [item for item in items if _fixes_pose(item)]
+        starts += [_implied_pose(item, c, pose) for item in fixing for c in item.candidates]
+    runs = [_icp(items, start, config) for start in starts]
+    least = min(run.rms for run in runs)
+    # of the runs that fit best (the field's twin poses fit exactly as well), the nearest
+    best = min(
+        (run for run in runs if run.rms <= least + _SAME_FIT_M),
+        key=lambda run: _pose_distance(run.pose, pose, config),
+    )
+    matches = tuple(tuple(m.name for m in c) for c in best.chosen)
+    iterations = sum(run.iterations for run in runs)
+    if best.rms > config.accept_rms_m:
+        return SensorModelResult(None, best.pose, best.rms, iterations, matches)
+    information = _information(items, best.chosen, best.pose, config)
+    features_used = sum(len(i.features) for i in items)
+    observation = PoseObservation(best.pose, information, best.rms, features_used)
+    return SensorModelResult(observation, best.pose, best.rms, iterations, matches)
+
+
+@dataclass(frozen=True)
+class _Run:
+    """One ICP run: its final ``pose``, ``rms`` error (m), ``iterations`` and the map
+    features ``chosen`` for its items."""
+
+    pose: FloatArray
+    rms: float
+    iterations: int
+    chosen: list[tuple[MapFeature, ...]]
+
+
+def _icp(items: list[MatchItem], start: FloatArray, config: SensorModelConfig) -> _Run:
+    """The hierarchical ICP from ``start`` (module docstring)."""
+    pose = start
     errors: list[float] = []
     chosen: list[tuple[MapFeature, ...]] = []
     for iteration in range(1, config.max_iterations + 1):
         included = items[: min(iteration, len(items))]
         chosen = [_nearest(item, pose, config) for item in included]
-        pairs = _point_pairs(included, chosen, pose, config)
-        pose = _step(pose, pairs)
+        pose = _step(pose, _point_pairs(included, chosen, pose, config))
         errors.append(_error(pose, _point_pairs(included, chosen, pose, config)))
         if len(included) == len(items) and (
             errors[-1] < config.converged_rms_m**2
             or (len(errors) >= 3 and errors[-1] >= min(errors[-3], errors[-2]))
         ):
             break
-    rms = math.sqrt(errors[-1])
-    matches = tuple(tuple(m.name for m in c) for c in chosen)
-    if rms > config.accept_rms_m:
-        return SensorModelResult(None, pose, rms, iteration, matches)
-    information = _information(items, chosen, pose, config)
-    observation = PoseObservation(pose, information, rms, sum(len(i.features) for i in items))
-    return SensorModelResult(observation, pose, rms, iteration, matches)
+    return _Run(pose, math.sqrt(errors[-1]), iteration, chosen)
+
+
+def _pose_distance(a: FloatArray, b: FloatArray, config: SensorModelConfig) -> float:
+    """Position distance plus the heading difference in metres (``direction_scale``)."""
+    heading = abs(float(wrap_angle(a[2] - b[2])))
+    return float(np.linalg.norm(a[:2] - b[:2])) + config.direction_scale_m_per_rad * heading
 
 
 # ----- pre-processing ---------------------------------------------------------------------
@@ -449,12 +493,49 @@ def _distance(
 def _nearest(
     item: MatchItem, pose: FloatArray, config: SensorModelConfig
 ) -> tuple[MapFeature, ...]:
+    """The candidate nearest the item placed from ``pose``."""
+
     def cost(candidate: tuple[MapFeature, ...]) -> float:
-        return sum(
-            _distance(f, pose, m, config) for f, m in zip(item.features, candidate, strict=True)
-        )
+        pairs = zip(item.features, candidate, strict=True)
+        return sum(_distance(f, pose, m, config) for f, m in pairs)
 
     return min(item.candidates, key=cost)
+
+
+def _direction(feature: FieldFeature | MapFeature) -> float:
+    """The direction of a feature known to have one."""
+    if feature.direction is None:
+        raise ValueError(f"a {feature.kind} without a direction cannot fix the pose")
+    return feature.direction
+
+
+def _fixes_pose(item: MatchItem) -> bool:
+    """Whether the item alone fixes the pose: two posts, or one feature with a direction."""
+    return item.kind == "two_posts" or (
+        len(item.features) == 1 and item.kind != "line" and item.features[0].direction is not None
+    )
+
+
+def _implied_pose(
+    item: MatchItem, candidate: tuple[MapFeature, ...], pose: FloatArray
+) -> FloatArray:
+    """The robot pose (3,) that puts a pose-fixing item exactly on ``candidate`` (an axial
+    direction: the branch nearer ``pose``'s heading)."""
+    seen = item.features
+    if item.kind == "two_posts":
+        a, b = seen[0].points[0], seen[1].points[0]
+        ma, mb = candidate[0].points[0], candidate[1].points[0]
+        heading = math.atan2(*(mb - ma)[::-1]) - math.atan2(*(b - a)[::-1])
+        anchor, mapped = a, ma
+    else:
+        feature, target = seen[0], candidate[0]
+        heading = _direction(target) - _direction(feature)
+        if feature.kind in AXIAL_KINDS and abs(float(wrap_angle(heading - pose[2]))) > math.pi / 2:
+            heading += math.pi
+        anchor, mapped = feature.points[0], target.points[0]
+    c, s = math.cos(heading), math.sin(heading)
+    position = mapped - np.array([[c, -s], [s, c]]) @ anchor
+    return np.array([position[0], position[1], float(wrap_angle(heading))])
 
 
 def _unit(angle: float) -> FloatArray:

@@ -6,6 +6,8 @@ from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any, ClassVar
 
+from perception.field.dimensions import FieldDimensions
+from perception.field.field_map import FieldMap
 from perception.representations import Prior
 from perception.types import CameraModel, PoleCode, PoleGeometry
 
@@ -36,18 +38,31 @@ class PerceptionContext:
     """What providers are built from: the robot's camera and the scene's known landmarks.
 
     ``camera`` is the camera's intrinsics, None for a robot without one; ``codes`` (L,) the
-    pole colour codes with their landmark ids; ``pole`` the pole geometry. Expensive shared
-    parts (the CNN) are built once per context and shared by every provider that reads them
-    (:meth:`cnn_detector`).
+    pole colour codes with their landmark ids; ``pole`` the pole geometry; ``field`` the SPL
+    field's dimensions (the map of :attr:`field_map`). Expensive shared parts (the CNN) are
+    built once per context and shared by every provider that reads them (:meth:`cnn_detector`).
     """
 
     def __init__(
-        self, camera: CameraModel | None, codes: Sequence[PoleCode], pole: PoleGeometry
+        self,
+        camera: CameraModel | None,
+        codes: Sequence[PoleCode],
+        pole: PoleGeometry,
+        field: FieldDimensions | None = None,
     ) -> None:
         self.camera = camera
         self.codes = tuple(codes)
         self.pole = pole
+        self.field = field if field is not None else FieldDimensions()
         self._cnn: dict[CnnDetectorConfig, CnnPoleDetector] = {}
+        self._field_map: FieldMap | None = None
+
+    @property
+    def field_map(self) -> FieldMap:
+        """The map of the field's features (:class:`perception.field.field_map.FieldMap`)."""
+        if self._field_map is None:
+            self._field_map = FieldMap(self.field)
+        return self._field_map
 
     def require_camera(self, reader: str) -> CameraModel:
         """The camera's intrinsics for the provider ``reader``; ValueError without a camera."""

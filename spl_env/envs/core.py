@@ -30,7 +30,12 @@ from numpy.typing import NDArray
 from perception.geometry import FloatArray, wrap_angle
 from perception.pipeline import PerceptionPipeline
 from perception.providers.base import PerceptionContext
-from perception.representations import CIRCLE_MAP, POLE_SIGHTINGS, PerceptionOutput
+from perception.representations import (
+    CIRCLE_MAP,
+    FIELD_FEATURES,
+    POLE_SIGHTINGS,
+    PerceptionOutput,
+)
 from perception.types import SensorFrame
 from spl_env.config import SPL_ALIASES, CoreConfig, EnvConfig
 from spl_env.envs.info import (
@@ -46,6 +51,7 @@ from spl_env.observations.base import (
     encode_all,
 )
 from spl_env.observations.circles import CircleMapEncoder
+from spl_env.observations.field_features import FieldFeatureEncoder
 from spl_env.overrides import apply_overrides
 from spl_env.rendering import TopDownView, draw_detections, side_by_side
 from spl_env.robots.nao import NaoCommand, NaoRobot
@@ -316,15 +322,25 @@ class SplEnv(RobotEnv[WorldState]):
         self.encoders = self.task.encoders()
         if cfg.sensors.laser is not None:  # the laser maps circles
             self.encoders += (CircleMapEncoder(cfg.observed_circles),)
+        localise_by_field = cfg.perception.self_pose == "field_features"
+        if localise_by_field:
+            self.encoders += (FieldFeatureEncoder(),)
         emulators = emulators_for(self.scene, self.robots, cfg.sensors, cfg.perception)
         outputs = {name for encoder in self.encoders for name in encoder.requires}
         outputs |= set(self.task.reward_requires())
         if cfg.info_level == "full":
             outputs |= set(FULL_INFO_REQUIRES)
+            if not cfg.scene.poles_enabled:
+                outputs.discard(POLE_SIGHTINGS)
             if cfg.sensors.laser is not None:
                 outputs.add(CIRCLE_MAP)
+            if localise_by_field:
+                outputs.add(FIELD_FEATURES)
         self.perception_context = PerceptionContext(
-            cfg.sensors.camera.model, self.scene.codes, cfg.scene.poles.geometry
+            cfg.sensors.camera.model,
+            self.scene.codes,
+            cfg.scene.poles.geometry,
+            self.scene.dimensions,
         )
         self.pipeline = PerceptionPipeline(
             cfg.perception, self.perception_context, sorted(outputs), emulated=tuple(emulators)

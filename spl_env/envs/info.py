@@ -14,8 +14,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from perception.field.features import FEATURE_KINDS, FieldFeature
 from perception.representations import (
     CIRCLE_MAP,
+    FIELD_FEATURES,
     ODOMETRY_POSE,
     POLE_SIGHTINGS,
     ROBOT_TRACKS,
@@ -34,11 +36,12 @@ def _rows(ids: NDArray[np.int64], landmark_ids: NDArray[np.int64]) -> NDArray[np
 @dataclass(frozen=True)
 class InfoLayout:
     """The fixed sizes of an env's ``info``: its poles' ids (L,) in row order, the number of
-    robot-track rows and of circle-map rows."""
+    robot-track rows, of circle-map rows and of field-feature rows."""
 
     landmark_ids: NDArray[np.int64]
     max_robots: int
     max_circles: int
+    max_field_features: int = 32
 
 
 def self_pose_info(slam: SlamEstimate, layout: InfoLayout) -> dict[str, Any]:
@@ -121,12 +124,41 @@ def circle_map_info(circles: tuple[MappedCircle, ...], layout: InfoLayout) -> di
     return info
 
 
+def field_features_info(features: tuple[FieldFeature, ...], layout: InfoLayout) -> dict[str, Any]:
+    """This frame's field features (robot frame), ``max_field_features`` rows in detection
+    order: ``field_features`` (F, 2, 2) the points (a segment's two ends; a point feature's
+    point twice), ``field_feature_covs`` (F, 2, 2, 2) their covariances,
+    ``field_feature_kinds`` (F,) the index of the kind in
+    :data:`perception.field.features.FEATURE_KINDS` (-1 past the last),
+    ``field_feature_directions`` (F,) (rad; 0 where ``field_feature_has_direction`` (F,) is
+    False: NaN would make equal infos compare unequal) and ``field_features_count``."""
+    k = layout.max_field_features
+    info = {
+        "field_features": np.zeros((k, 2, 2)),
+        "field_feature_covs": np.zeros((k, 2, 2, 2)),
+        "field_feature_kinds": np.full(k, -1, dtype=np.int64),
+        "field_feature_directions": np.zeros(k),
+        "field_feature_has_direction": np.zeros(k, dtype=bool),
+        "field_features_count": np.int64(min(len(features), k)),
+    }
+    for row, feature in enumerate(features[:k]):
+        points = np.resize(feature.points, (2, 2))
+        info["field_features"][row] = points
+        info["field_feature_covs"][row] = np.resize(feature.cov, (2, 2, 2))
+        info["field_feature_kinds"][row] = FEATURE_KINDS.index(feature.kind)
+        if feature.direction is not None:
+            info["field_feature_directions"][row] = feature.direction
+            info["field_feature_has_direction"][row] = True
+    return info
+
+
 PERCEPTION_INFO: Mapping[str, Callable[[Any, InfoLayout], dict[str, Any]]] = {
     SELF_POSE: self_pose_info,
     POLE_SIGHTINGS: pole_sightings_info,
     ODOMETRY_POSE: lambda pose, layout: {"odometry_pose": np.asarray(pose).copy()},
     ROBOT_TRACKS: robot_tracks_info,
     CIRCLE_MAP: circle_map_info,
+    FIELD_FEATURES: field_features_info,
 }
 # what the full info always reads; robot tracks join where the env's task already tracks robots
 FULL_INFO_REQUIRES = (SELF_POSE, POLE_SIGHTINGS, ODOMETRY_POSE)

@@ -52,10 +52,11 @@ class HeadControlTask(Task):
 
     def encoders(self) -> tuple[ObservationEncoder, ...]:
         ctx = self.context
+        poles = (PoleMapEncoder(ctx.n_landmarks),) if ctx.n_landmarks else ()
         return (
             SelfPoseEncoder(ctx.dimensions),
             HeadEncoder(ctx.robot),
-            PoleMapEncoder(ctx.n_landmarks),
+            *poles,
             SonarEncoder(),
             EpisodeClockEncoder(self.config.episode_s),
         )

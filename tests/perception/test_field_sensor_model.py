@@ -209,3 +209,34 @@ def test_bad_arguments_are_refused() -> None:
 def test_no_features_give_no_observation() -> None:
     result = observe_pose([], TRUTH, FIELD, CONFIG)
     assert result.observation is None and result.iterations == 0
+
+
+def twin(pose: np.ndarray) -> np.ndarray:
+    """The pose's half-turn twin: the field looks the same from there."""
+    return np.array([-pose[0], -pose[1], float(wrap_angle(pose[2] + math.pi))])
+
+
+def test_a_start_per_candidate_finds_the_pose_or_its_twin_from_anywhere() -> None:
+    config = SensorModelConfig(starts="hypotheses")
+    features = rich_view()
+    rng = np.random.default_rng(1)
+    for _ in range(10):
+        prior = np.array([*rng.uniform([-4.5, -3.0], [4.5, 3.0]), rng.uniform(-math.pi, math.pi)])
+        result = observe_pose(features, prior, FIELD, config)
+        assert result.observation is not None
+        truth, mirror = pose_error(result.pose, TRUTH), pose_error(result.pose, twin(TRUTH))
+        found = truth if np.abs(truth).max() < np.abs(mirror).max() else mirror
+        np.testing.assert_allclose(found, 0.0, atol=1e-6)
+        # of the two equally good fits, the one nearer the prior
+        nearer = min(
+            (TRUTH, twin(TRUTH)),
+            key=lambda p: (
+                np.linalg.norm(p[:2] - prior[:2])
+                + CONFIG.direction_scale_m_per_rad * abs(float(wrap_angle(p[2] - prior[2])))
+            ),
+        )
+        np.testing.assert_allclose(pose_error(result.pose, nearer), 0.0, atol=1e-6)
+    # the seed's single start from the prior fails from far enough
+    far = twin(TRUTH) + np.array([0.0, 0.0, 1.5])
+    single = observe_pose(features, far, FIELD, CONFIG)
+    assert single.observation is None or np.abs(pose_error(single.pose, TRUTH)).max() > 0.1

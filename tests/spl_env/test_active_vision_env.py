@@ -89,7 +89,7 @@ def test_info_contract(env: gym.Env) -> None:
     assert "timing" not in info  # only with info_timing=True
     per, gt = info["perception"], info["ground_truth"]
     n = len(per["landmark_ids"])
-    assert n == 6
+    assert n == (0 if "NoPoles" in env.spec.id else 6)
     shapes = {
         "pose": (3,),
         "pose_cov": (3, 3),
@@ -98,10 +98,20 @@ def test_info_contract(env: gym.Env) -> None:
         "landmarks": (n, 2),
         "landmark_covs": (n, 2, 2),
         "landmarks_mapped": (n,),
-        "sightings": (n, 2),
-        "sighted": (n,),
     }
-    tracks_robots = env.spec is not None and env.spec.id == "SPL/ActiveVision-v1"
+    if n:  # the pole sightings
+        shapes |= {"sightings": (n, 2), "sighted": (n,)}
+    else:  # the field features the pose comes from, 32 rows
+        shapes |= {
+            "field_features": (32, 2, 2),
+            "field_feature_covs": (32, 2, 2, 2),
+            "field_feature_kinds": (32,),
+            "field_feature_directions": (32,),
+            "field_feature_has_direction": (32,),
+            "field_features_count": (),
+        }
+    tracks_robots = env.spec is not None and env.spec.id.startswith("SPL/ActiveVision-")
+    tracks_robots &= env.spec is not None and env.spec.id.endswith("-v1")
     if tracks_robots:  # v1 adds the confirmed robot tracks, 16 rows
         k = env.unwrapped.config.perception.robot_tracker.max_tracks
         shapes |= {
@@ -113,21 +123,23 @@ def test_info_contract(env: gym.Env) -> None:
             "robots_tracked": (k,),
         }
     assert {k: v.shape for k, v in per.items()} == shapes
-    assert per["landmarks_mapped"].dtype == np.bool_ and per["sighted"].dtype == np.bool_
+    assert per["landmarks_mapped"].dtype == np.bool_
     assert np.all(per["landmarks"][~per["landmarks_mapped"]] == 0.0)
     assert np.all(per["landmark_covs"][~per["landmarks_mapped"]] == 0.0)
-    assert np.all(per["sightings"][~per["sighted"]] == 0.0)
+    if n:
+        assert per["sighted"].dtype == np.bool_
+        assert np.all(per["sightings"][~per["sighted"]] == 0.0)
     n_others = env.unwrapped.config.task.n_other_robots
     assert {k: v.shape for k, v in gt.items()} == {
         "robot_pose": (3,),
         "head": (2,),
-        "landmarks": (6, 2),
-        "landmark_ids": (6,),
+        "landmarks": (n, 2),
+        "landmark_ids": (n,),
         "robots": (n_others, 3),
         "robot_teams": (n_others,),
         "ball": (2,),
         "ball_velocity": (2,),
-        "circles": (10, 3),  # 4 goal posts and 6 poles
+        "circles": (4 + n, 3),  # 4 goal posts and the poles
     }
     np.testing.assert_array_equal(per["landmark_ids"], gt["landmark_ids"])
     # every entry keeps its shape from step to step (vector envs stack them)
@@ -204,11 +216,23 @@ def test_every_id_is_registered_with_its_own_env_class() -> None:
     from spl_env.envs.active_vision_robots import ActiveVisionRobotsEnv
     from spl_env.envs.look_around import LookAroundEnv
 
-    assert ENV_IDS == ("SPL/ActiveVision-v0", "SPL/ActiveVision-v1", "SPL/LookAround-v0")
+    assert ENV_IDS == (
+        "SPL/ActiveVision-v0",
+        "SPL/ActiveVision-v1",
+        "SPL/LookAround-v0",
+        "SPL/ActiveVision-NoPoles-v1",
+        "SPL/LookAround-NoPoles-v0",
+    )
     classes = []
     for env_id in ENV_IDS:
         e = gym.make(env_id, **FAST)
         classes.append(type(e.unwrapped))
         assert e.spec is not None and e.spec.id == env_id
         e.close()
-    assert classes == [ActiveVisionEnv, ActiveVisionRobotsEnv, LookAroundEnv]
+    assert classes == [
+        ActiveVisionEnv,
+        ActiveVisionRobotsEnv,
+        LookAroundEnv,
+        ActiveVisionRobotsEnv,
+        LookAroundEnv,
+    ]

@@ -40,6 +40,7 @@ SPL_ALIAS_CASES: dict[str, tuple[str, Any]] = {
     "laser": ("sensors.laser", LaserConfig(n_beams=90)),
     "frontend": ("perception.pole_sightings", "colour"),
     "self_pose": ("perception.self_pose", "oracle"),
+    "field_features": ("perception.field_features", "oracle"),
     "backend": ("perception.slam.backend", "fej"),
     "min_views": ("perception.slam.min_views", 3),
     "gate": ("perception.slam.gate", "mahalanobis"),
@@ -317,7 +318,7 @@ def test_env_config_validates_when_built_directly() -> None:
         EnvConfig(task=TaskConfig(episode_s=0.15))
     with pytest.raises(ValueError, match="whole multiple"):
         EnvConfig(control_dt_s=0.1, physics_dt_s=0.03)
-    with pytest.raises(ValueError, match="poles_enabled must be True"):
+    with pytest.raises(ValueError, match="poles_enabled=False needs a self pose"):
         EnvConfig(scene=SceneConfig(poles_enabled=False))
     with pytest.raises(ValueError, match="info_level"):
         EnvConfig(info_level="none")

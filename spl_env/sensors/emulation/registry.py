@@ -9,11 +9,13 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 
+from perception.field.field_map import FieldMap
 from perception.pipeline import PipelineConfig
-from perception.representations import POLE_SIGHTINGS, ROBOT_SIGHTINGS
+from perception.representations import FIELD_FEATURES, POLE_SIGHTINGS, ROBOT_SIGHTINGS
 from perception.vision.colour_filter import ColourPoleDetector
 from spl_env.robots.nao import NaoRobot
 from spl_env.scenes.spl_field import SplFieldScene
+from spl_env.sensors.emulation.field import GeometricFieldFeatures
 from spl_env.sensors.emulation.poles import GeometricPoleCamera, GeometricPoleSightings
 from spl_env.sensors.emulation.robots import GeometricRobotSightings
 from spl_env.sensors.rig import Emulator, RigConfig
@@ -48,11 +50,19 @@ def _vision_robot_sightings(
     )
 
 
+def _vision_field_features(
+    scene: SplFieldScene, robots: list[NaoRobot], sensors: RigConfig, perception: PipelineConfig
+) -> GeometricFieldFeatures:
+    field_map = FieldMap(scene.dimensions)
+    return GeometricFieldFeatures(field_map, sensors.camera.model, perception.feature_view)
+
+
 # (representation, the provider it emulates) -> how to build the emulator
 EMULATORS: Mapping[tuple[str, str], EmulatorFactory] = {
     (POLE_SIGHTINGS, "colour"): _colour_pole_sightings,
     (ROBOT_SIGHTINGS, "cnn"): _cnn_robot_sightings,
     (ROBOT_SIGHTINGS, "vision"): _vision_robot_sightings,
+    (FIELD_FEATURES, "vision"): _vision_field_features,
 }
 
 

@@ -1,0 +1,144 @@
+"""Field features and the pose from them (seed 004 ch. 2) as providers.
+
+``field_features``: :class:`VisionFieldFeatures` (detected in the camera image,
+:mod:`perception.vision.field_features`) or :class:`OracleFieldFeatures` (the map's features in
+view of the camera at the true pose, with configured noise). ``self_pose``:
+:class:`FieldFeaturePose`, the pose filter (:mod:`perception.field.pose_filter`) predicting
+with the walk odometry and fusing each frame's pose observation from the unified sensor model
+(:mod:`perception.field.sensor_model`), started at the episode's prior pose.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from perception.field.features import FieldFeature
+from perception.field.field_map import FieldMap
+from perception.field.pose_filter import PoseFilter, PoseFilterConfig
+from perception.field.sensor_model import SensorModelConfig, observe_pose
+from perception.field.visibility import FeatureViewConfig, visible_features
+from perception.providers.base import PerceptionContext, Provider
+from perception.representations import (
+    FIELD_FEATURE_LAST_SEEN,
+    FIELD_FEATURES,
+    SELF_POSE,
+    Prior,
+)
+from perception.types import CameraModel, GroundTruth, SlamEstimate
+from perception.vision.field_features import FieldFeatureConfig, detect_field_features
+
+
+class VisionFieldFeatures(Provider):
+    """The field features of the frame's image
+    (:func:`~perception.vision.field_features.detect_field_features`)."""
+
+    provides = FIELD_FEATURES
+    requires = ("image", "camera_state")
+
+    def __init__(self, config: FieldFeatureConfig, context: PerceptionContext) -> None:
+        self.config = config
+        self.camera: CameraModel = context.require_camera("the field-feature detector")
+
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> tuple[FieldFeature, ...]:
+        image = inputs["image"]
+        if image is None:
+            raise ValueError("VisionFieldFeatures needs a rendered image, got None")
+        return detect_field_features(image, self.camera, inputs["camera_state"], self.config)
+
+
+class OracleFieldFeatures(Provider):
+    """The map's features in view of the camera at the true pose
+    (:func:`~perception.field.visibility.visible_features`), with noise drawn from the
+    episode's generator; robots hide nothing."""
+
+    provides = FIELD_FEATURES
+    requires = ("truth", "camera_state")
+
+    def __init__(self, config: FeatureViewConfig, context: PerceptionContext) -> None:
+        self.config = config
+        self.camera: CameraModel = context.require_camera("the field-feature oracle")
+        self.field_map: FieldMap = context.field_map
+        self._rng: np.random.Generator | None = None
+
+    def reset(self, prior: Prior) -> None:
+        self._rng = prior.rng
+
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> tuple[FieldFeature, ...]:
+        if self._rng is None:
+            raise RuntimeError("OracleFieldFeatures.reset() must be called first")
+        truth: GroundTruth = inputs["truth"]
+        return visible_features(
+            self.field_map,
+            truth.robot_pose,
+            self.camera,
+            inputs["camera_state"],
+            self.config,
+            self._rng,
+        )
+
+
+class FieldFeatureHistory(Provider):
+    """When a feature of each kind was last seen: kind -> time (s)."""
+
+    provides = FIELD_FEATURE_LAST_SEEN
+    requires = (FIELD_FEATURES,)
+
+    def __init__(self) -> None:
+        self._last_seen: dict[str, float] = {}
+
+    def reset(self, prior: Prior) -> None:
+        self._last_seen = {}
+
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> dict[str, float]:
+        for feature in inputs[FIELD_FEATURES]:
+            self._last_seen[feature.kind] = time_s
+        return dict(self._last_seen)
+
+
+class FieldFeaturePose(Provider):
+    """The robot pose from walk odometry and field features: one pose-filter prediction per
+    odometry increment and one update per frame whose features the sensor model places
+    consistently (a refused observation, or a gated one, changes nothing). The estimate holds
+    no landmarks: the field's map is known."""
+
+    provides = SELF_POSE
+    requires = ("odometry_delta", FIELD_FEATURES)
+
+    def __init__(
+        self, model: SensorModelConfig, config: PoseFilterConfig, context: PerceptionContext
+    ) -> None:
+        self.model = model
+        self.config = config
+        self.field_map = context.field_map
+        self._filter: PoseFilter | None = None
+        self.observations = 0  # pose observations fused this episode
+
+    @property
+    def filter(self) -> PoseFilter:
+        """The episode's pose filter (after :meth:`reset`)."""
+        if self._filter is None:
+            raise RuntimeError("FieldFeaturePose.reset() must be called before reading the filter")
+        return self._filter
+
+    def reset(self, prior: Prior) -> None:
+        self._filter = PoseFilter(self.config, prior.pose)
+        self.observations = 0
+
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> SlamEstimate:
+        pose_filter = self.filter
+        pose_filter.predict(inputs["odometry_delta"])
+        features = inputs[FIELD_FEATURES]
+        if features:
+            result = observe_pose(features, pose_filter.pose, self.field_map, self.model)
+            if result.observation is not None and pose_filter.update(result.observation):
+                self.observations += 1
+        return SlamEstimate(
+            pose=pose_filter.pose,
+            pose_cov=pose_filter.cov,
+            landmark_ids=np.zeros(0, dtype=np.int64),
+            landmarks=np.zeros((0, 2)),
+            landmark_covs=np.zeros((0, 2, 2)),
+        )
