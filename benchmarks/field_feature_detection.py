@@ -33,9 +33,9 @@ perpendicular distance of line ends to their map line, point distances, directio
 ``nees`` the mean squared error over the variance along the error (a consistent covariance
 gives about 1). Cost: milliseconds per frame of the detector alone (one thread).
 
-``--row-offset 1`` runs the detector told of the renderer's one-row offset
-(``FieldFeatureConfig.row_offset_px``). Writes ``benchmarks/results/field_feature_detection.json``
-(``--out``); 300 frames take about 10 s::
+``--row-offset`` (default 1, the pipeline's) tells the detector of the renderer's one-row
+offset (``FieldFeatureConfig.row_offset_px``; 0: not told). Writes
+``benchmarks/results/field_feature_detection.json`` (``--out``); 300 frames take about 10 s::
 
     python benchmarks/field_feature_detection.py --frames 300 --seed 100
     python benchmarks/field_feature_detection.py --frames 300 --seed 100 --row-offset 1 \
@@ -346,7 +346,7 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=100)
     parser.add_argument("--out", type=Path, default=RESULTS / "field_feature_detection.json")
     parser.add_argument(
-        "--row-offset", type=float, default=0.0, help="FieldFeatureConfig.row_offset_px"
+        "--row-offset", type=float, default=1.0, help="FieldFeatureConfig.row_offset_px"
     )
     args = parser.parse_args()
     cv2.setNumThreads(1)
