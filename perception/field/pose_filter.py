@@ -100,6 +100,11 @@ class PoseFilterConfig:
     - ``gate_probability``: a pose observation is refused when its squared Mahalanobis
       distance in the subspace it informs exceeds the chi-square quantile at this probability,
       in (0, 1), with ``rank(information)`` degrees of freedom; None fuses every observation.
+    - ``observation_weight`` in (0, 1]: the share of an observation's information fused. The
+      sensor model's information takes one frame's feature errors as independent, and this
+      filter takes successive frames' as independent; a walking robot sees the same lines
+      frame after frame with errors they share (sway, the camera model), so the full
+      information makes the filter overconfident. 1 fuses it all.
     """
 
     translation_noise_m_per_sqrt_m: float = _ODOMETRY_DEFAULTS.translation_noise_m_per_sqrt_m
@@ -108,6 +113,7 @@ class PoseFilterConfig:
     rotation_noise_rad_per_sqrt_rad: float = _ODOMETRY_DEFAULTS.rotation_noise_rad_per_sqrt_rad
     initial_pose_std: tuple[float, float, float] = _ODOMETRY_DEFAULTS.initial_pose_std
     gate_probability: float | None = 0.99  # refuses beyond this chi-square(rank L) quantile
+    observation_weight: float = 1.0
 
     def __post_init__(self) -> None:
         owner = "PoseFilterConfig"
@@ -125,6 +131,9 @@ class PoseFilterConfig:
             )
         if self.gate_probability is not None:
             check_probability(owner, "gate_probability", self.gate_probability)
+        check_positive(
+            owner, "observation_weight", self.observation_weight, upper=1.0, upper_inclusive=True
+        )
 
     @property
     def initial_cov(self) -> FloatArray:
@@ -255,7 +264,7 @@ class PoseFilter:
             raise TypeError(f"{name} must be a PoseObservation, got {type(observation).__name__}")
         # Heading: near ±pi the plain difference z - x can be off by 2 pi.
         e = wrapped_residual(observation.pose, self._x, _HEADING)
-        eigenvalues, U = np.linalg.eigh(observation.information)
+        eigenvalues, U = np.linalg.eigh(self._config.observation_weight * observation.information)
         largest = float(eigenvalues[-1])
         kept = eigenvalues > _RANK_RTOL * largest if largest > 0 else np.zeros(3, dtype=bool)
         root = np.sqrt(np.where(kept, eigenvalues, 0.0))

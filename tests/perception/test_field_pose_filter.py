@@ -361,3 +361,19 @@ def test_observation_rejects_non_psd_information() -> None:
         observation([0.0, 0.0, 0.0], np.diag([1.0, -1.0, 1.0]))
     with pytest.raises(ValueError, match="pose"):
         observation([0.0, math.nan, 0.0], np.eye(3))
+
+
+def test_an_observation_weight_fuses_that_share_of_the_information() -> None:
+    P0 = np.diag([0.04, 0.09, 0.01])
+    z = np.array([0.3, -0.2, 0.1])
+    L = np.diag([400.0, 100.0, 900.0])
+    weighted = PoseFilter(
+        PoseFilterConfig(observation_weight=0.25, gate_probability=None), np.zeros(3)
+    )
+    weighted.reset(np.zeros(3), P0)
+    assert weighted.update(PoseObservation(z, L, 0.0, 1))
+    P = np.linalg.inv(np.linalg.inv(P0) + 0.25 * L)  # information form with a quarter of L
+    np.testing.assert_allclose(weighted.cov, P, rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(weighted.pose, P @ (0.25 * L) @ z, rtol=1e-9, atol=1e-12)
+    with pytest.raises(ValueError, match="observation_weight"):
+        PoseFilterConfig(observation_weight=0.0)
