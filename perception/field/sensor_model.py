@@ -58,6 +58,7 @@ import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Literal
 
 import numpy as np
@@ -157,6 +158,20 @@ class MatchItem:
     def distance_m(self) -> float:
         """The nearest of its features' distances from the robot (m)."""
         return min(f.distance_m for f in self.features)
+
+    @cached_property
+    def targets(self) -> tuple[tuple[FloatArray, FloatArray], ...]:
+        """Per feature: its candidates' points (C, P, 2) and directions (C,) (NaN: none),
+        stacked once for :func:`_nearest`."""
+        return tuple(
+            (
+                np.array([c[i].points for c in self.candidates]),
+                np.array(
+                    [np.nan if c[i].direction is None else c[i].direction for c in self.candidates]
+                ),
+            )
+            for i in range(len(self.features))
+        )
 
 
 @dataclass(frozen=True)
@@ -465,41 +480,37 @@ def _place(pose: FloatArray, points: FloatArray) -> FloatArray:
     return points @ np.array([[c, s], [-s, c]]) + pose[:2]
 
 
-def _segment_distance(point: FloatArray, segment: FloatArray) -> float:
-    a, b = segment
-    t = float(np.clip((point - a) @ (b - a) / float((b - a) @ (b - a)), 0.0, 1.0))
-    return float(np.linalg.norm(point - (a + t * (b - a))))
+def _segment_distances(point: FloatArray, segments: FloatArray) -> FloatArray:
+    """Distances (C,) from ``point`` (2,) to each of ``segments`` (C, 2, 2)."""
+    a, d = segments[:, 0], segments[:, 1] - segments[:, 0]
+    t = np.clip(np.einsum("ci,ci->c", point - a, d) / np.einsum("ci,ci->c", d, d), 0.0, 1.0)
+    return np.hypot(*(point - (a + t[:, None] * d)).T)
 
 
-def _direction_gap(feature: FieldFeature, pose: FloatArray, target: MapFeature) -> float:
-    if feature.direction is None or target.direction is None:
-        return 0.0
-    placed = feature.direction + pose[2]
-    if feature.kind in AXIAL_KINDS:
-        return _axial_difference(placed, target.direction)
-    return abs(float(wrap_angle(placed - target.direction)))
-
-
-def _distance(
-    feature: FieldFeature, pose: FloatArray, target: MapFeature, config: SensorModelConfig
-) -> float:
-    placed = _place(pose, feature.points)
-    if feature.kind == "line":
-        return sum(_segment_distance(p, target.points) for p in placed)
-    position = float(np.linalg.norm(placed[0] - target.points[0]))
-    return position + config.direction_scale_m_per_rad * _direction_gap(feature, pose, target)
+def _costs(item: MatchItem, pose: FloatArray, config: SensorModelConfig) -> FloatArray:
+    """How far (C,) the item placed from ``pose`` lies from each of its candidates: a line's
+    ends' distances to the map segment; a point's distance plus its direction's difference
+    times ``direction_scale_m_per_rad`` (modulo pi for an axial one)."""
+    total = np.zeros(len(item.candidates))
+    for feature, (points, directions) in zip(item.features, item.targets, strict=True):
+        placed = _place(pose, feature.points)
+        if feature.kind == "line":
+            total += sum(_segment_distances(p, points) for p in placed)
+            continue
+        total += np.hypot(*(placed[0] - points[:, 0]).T)
+        if feature.direction is not None:
+            gap = np.abs(wrap_angle(feature.direction + pose[2] - directions))
+            if feature.kind in AXIAL_KINDS:
+                gap = np.abs(wrap_angle(2.0 * (feature.direction + pose[2] - directions))) / 2
+            total += config.direction_scale_m_per_rad * np.nan_to_num(gap, nan=0.0)
+    return total
 
 
 def _nearest(
     item: MatchItem, pose: FloatArray, config: SensorModelConfig
 ) -> tuple[MapFeature, ...]:
-    """The candidate nearest the item placed from ``pose``."""
-
-    def cost(candidate: tuple[MapFeature, ...]) -> float:
-        pairs = zip(item.features, candidate, strict=True)
-        return sum(_distance(f, pose, m, config) for f, m in pairs)
-
-    return min(item.candidates, key=cost)
+    """The candidate nearest the item placed from ``pose`` (the first of equals)."""
+    return item.candidates[int(np.argmin(_costs(item, pose, config)))]
 
 
 def _direction(feature: FieldFeature | MapFeature) -> float:
