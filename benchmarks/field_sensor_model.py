@@ -5,7 +5,10 @@ margin, any heading) from ``default_rng(--seed)``; at each, the features a stand
 with its head straight and pitched ``--head-pitch-deg`` down, through the top camera and the
 bottom one (seed 004 uses both). ``--features ideal`` takes them from the map
 (:func:`perception.field.visibility.visible_features`: every feature in view, occlusion
-ignored, noise of its default configuration, which is not fitted to a detector).
+ignored, noise of its default configuration, which is not fitted to a detector), one noisy
+draw per start; ``--features rendered`` detects them in the two cameras' rendered frames
+(:func:`perception.vision.field_features.detect_field_features`, the pipeline's
+configuration; the other robots stand off the carpet), one detection per pose for all starts.
 
 1. **Table 1 analogue**: the share of poses at which each kind is seen, and the pre-processed
    items (two goal posts, parallel lines).
@@ -36,14 +39,18 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from field_feature_detection import Scene
 
 from perception.field.features import FieldFeature
 from perception.field.field_map import FieldMap
 from perception.field.sensor_model import SensorModelConfig, match_items, observe_pose
 from perception.field.visibility import FeatureViewConfig, visible_features
-from perception.geometry import FloatArray, wrap_angle
+from perception.geometry import FloatArray, rot_z, wrap_angle
+from perception.pipeline import PipelineConfig
 from perception.types import CameraModel
+from perception.vision.field_features import detect_field_features
 from spl_env.robots.nao import RobotConfig, camera_state_for
+from spl_env.sensors.camera import EpisodeLighting
 
 RESULTS = Path("benchmarks/results")
 HEADING_ERRORS_DEG = (15, 30, 45, 90)
@@ -84,6 +91,28 @@ def seen_features(
     return features
 
 
+def detected_features(
+    scene: Scene, pose: FloatArray, head_pitch_rad: float, rng: np.random.Generator
+) -> list[FieldFeature]:
+    """What the detector finds in the top and bottom cameras' frames at ``pose``."""
+    robot, camera = RobotConfig(), CameraModel()
+    config = PipelineConfig().field_detector
+    head = np.array([0.0, head_pitch_rad])
+    scene.robot.place(pose, head=head)
+    for k, other in enumerate(scene.others):  # off the carpet
+        other.place(np.array([-6.0 + 1.0 * k, 4.5, 0.0]))
+    features: list[FieldFeature] = []
+    for which in ("top", "bottom"):
+        state = camera_state_for(robot, head, which)
+        turn = rot_z(pose[2])
+        position = np.array([pose[0], pose[1], 0.0]) + turn @ state.position
+        image, _ = scene.camera.render(
+            scene.world, position, turn @ state.rotation(), EpisodeLighting.default(), rng
+        )
+        features += detect_field_features(image, camera, state, config)
+    return features
+
+
 def noisy(features: list[FieldFeature], rng: np.random.Generator) -> list[FieldFeature]:
     """One draw of ``features`` moved by noise of their own covariances."""
     drawn = []
@@ -107,21 +136,22 @@ def start_grid(field_map: FieldMap, spacing_m: float) -> FloatArray:
 def convergence(
     pose: FloatArray,
     field_map: FieldMap,
-    head_pitch_rad: float,
     rng: np.random.Generator,
     config: SensorModelConfig,
     grid_m: float,
+    exact: list[FieldFeature],
+    draw_noise: bool,
 ) -> dict[str, Any]:
-    """Area of convergence and positioning error at one pose."""
+    """Area of convergence and positioning error at one pose from ``exact`` features (one
+    noisy draw of them per start with ``draw_noise``)."""
     grid = start_grid(field_map, grid_m)
-    exact = seen_features(pose, field_map, head_pitch_rad, None)
     shares, errors = {}, []
     for degrees in HEADING_ERRORS_DEG:
         hits = 0
         for sign in (-1.0, 1.0):
             heading = pose[2] + sign * math.radians(degrees)
             for xy in grid:
-                features = noisy(exact, rng)
+                features = noisy(exact, rng) if draw_noise else exact
                 result = observe_pose(features, np.array([*xy, heading]), field_map, config)
                 if result.observation is None:
                     continue
@@ -144,7 +174,7 @@ def main() -> None:
     parser.add_argument("--poses", type=int, default=20)
     parser.add_argument("--seed", type=int, default=100)
     parser.add_argument("--head-pitch-deg", type=float, default=10.0)
-    parser.add_argument("--features", choices=("ideal",), default="ideal")
+    parser.add_argument("--features", choices=("ideal", "rendered"), default="ideal")
     parser.add_argument("--order", choices=("seed", "candidates"), default="seed")
     parser.add_argument("--starts", choices=("prior", "hypotheses"), default="prior")
     parser.add_argument("--grid", type=float, default=0.5, help="start grid spacing (m)")
@@ -157,8 +187,13 @@ def main() -> None:
     poses = draw_poses(args.poses, rng, field_map)
     config = SensorModelConfig(order=args.order, starts=args.starts)
     records, incidence = [], Counter()
+    ideal = args.features == "ideal"
+    scene = None if ideal else Scene()
     for index, pose in enumerate(poses):
-        features = seen_features(pose, field_map, pitch, None)
+        if scene is None:
+            features = seen_features(pose, field_map, pitch, None)
+        else:
+            features = detected_features(scene, pose, pitch, rng)
         items = match_items(features, field_map, config)
         kinds = {f.kind for f in features} | {item.kind for item in items}
         incidence.update(kinds)
@@ -168,7 +203,7 @@ def main() -> None:
             "items": len(items),
         }
         if len(items) >= 2:
-            record |= convergence(pose, field_map, pitch, rng, config, args.grid)
+            record |= convergence(pose, field_map, rng, config, args.grid, features, ideal)
         records.append(record)
         print(f"pose {index}: {len(items)} items, {record.get('share_converged')}", flush=True)
     multi = [r for r in records if r["items"] >= 2]
