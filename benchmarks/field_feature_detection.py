@@ -28,7 +28,9 @@ pose) lie within ``tolerance`` of one map line (edge) segment: ``TOL_M`` plus ``
 standard deviations of that end (its covariance's largest axis). A point feature is correct
 within ``POINT_TOL_M`` (``FAR_POINT_TOL_M`` for goal posts), or ``TOL_SIGMA`` of its standard
 deviations if more, of a map feature of its kind.
-Recall: the share of those that should be found that a correct detection matches. Errors: the
+Recall: the share of those that should be found that a correct detection matches. Counts are
+kept per kind and per kind and range band (``RANGE_BANDS_M``: a detection's distance from the
+robot, a map feature's nearest point's). Errors: the
 perpendicular distance of line ends to their map line, point distances, direction errors;
 ``nees`` the mean squared error over the variance along the error (a consistent covariance
 gives about 1). Cost: milliseconds per frame of the detector alone (one thread).
@@ -181,6 +183,16 @@ def nees(error: FloatArray, cov: FloatArray) -> float:
     return float(error @ np.linalg.solve(cov, error))
 
 
+RANGE_BANDS_M = (2.0, 4.0)  # the counts are also kept per range band: < 2 m, 2-4 m, > 4 m
+
+
+def _groups(kind: str, distance_m: float) -> tuple[str, str]:
+    """The stats keys a count goes to: the kind's, and the kind's in its range band."""
+    band = int(np.searchsorted(RANGE_BANDS_M, distance_m))
+    names = ("< 2 m", "2-4 m", "> 4 m")
+    return kind, f"{kind} {names[band]}"
+
+
 def evaluate_frame(
     features: tuple[FieldFeature, ...],
     pose: FloatArray,
@@ -197,9 +209,10 @@ def evaluate_frame(
         found = set()
         for f in (f for f in features if f.kind == kind):
             k = match_segment(f, pose, targets)
-            stats[kind]["detected"] += 1
+            for group in _groups(kind, f.distance_m):
+                stats[group]["detected"] += 1
+                stats[group]["false"] += k < 0
             if k < 0:
-                stats[kind]["false"] += 1
                 continue
             found.add(k)
             a, b = targets[k].points
@@ -211,8 +224,9 @@ def evaluate_frame(
                 inward = -np.sign(pts.mean(axis=0)) * (np.abs(pts.mean(axis=0)) > 1.0)
                 pts = pts + STEP_M * inward
             if visible(pts, pose, labels, ids, cam, state).sum() * STEP_M >= MIN_VISIBLE_M:
-                stats[kind]["should"] += 1
-                stats[kind]["recalled"] += k in found
+                for group in _groups(kind, segment_distance(pose[:2], *target.points)):
+                    stats[group]["should"] += 1
+                    stats[group]["recalled"] += k in found
     lines = [t.points for t in field.of_kind("line")]
     point_kinds = ("corner", "t_junction", "x_junction", "centre_circle", "penalty_mark")
     for kind in (*point_kinds, "goal_post"):
@@ -220,14 +234,16 @@ def evaluate_frame(
         tol = FAR_POINT_TOL_M if kind == "goal_post" else POINT_TOL_M
         found = set()
         for f in (f for f in features if f.kind == kind):
-            stats[kind]["detected"] += 1
             p = transform_points(pose, f.points)[0]
             dists = [float(np.hypot(*(p - t.points[0]))) for t in targets]
             k = int(np.argmin(dists))
-            if dists[k] > max(
+            wrong = dists[k] > max(
                 tol, TOL_SIGMA * math.sqrt(float(np.linalg.eigvalsh(f.cov[0]).max()))
-            ):
-                stats[kind]["false"] += 1
+            )
+            for group in _groups(kind, f.distance_m):
+                stats[group]["detected"] += 1
+                stats[group]["false"] += wrong
+            if wrong:
                 continue
             found.add(k)
             err = p - targets[k].points[0]
@@ -259,8 +275,9 @@ def evaluate_frame(
                     pts = samples(vertex, vertex + ARM_M * arm)
                     ok &= visible(pts, pose, labels, scene.line_ids, cam, state).mean() >= 0.8
             if ok:
-                stats[kind]["should"] += 1
-                stats[kind]["recalled"] += k in found
+                for group in _groups(kind, float(np.hypot(*(vertex - pose[:2])))):
+                    stats[group]["should"] += 1
+                    stats[group]["recalled"] += k in found
 
 
 def _post_foot_visible(
