@@ -14,7 +14,8 @@ Provider choice, by representation (:data:`PROVIDERS`; the defaults of
                                               │
     odometry_delta ───────────────────────────┼──► self_pose [ekf_slam | oracle] ──┐
     odometry_delta, laser ──► self_pose [circle_slam]
-    image ──► field_features [vision | oracle] ──► self_pose [field_features]
+    image (+ bottom_image) ──► field_features [vision | vision_both_cameras | oracle]
+                                  ──► self_pose [field_features]
                                   └──► field_feature_last_seen [history]
                   └──► odometry_pose            └──► pole_last_seen [history]     │
     image, sonar_observations ──► robot_sightings [vision] ──┐                     │
@@ -49,6 +50,7 @@ from perception.providers.field import (
     FieldFeatureHistory,
     FieldFeaturePose,
     OracleFieldFeatures,
+    TwoCameraFieldFeatures,
     VisionFieldFeatures,
 )
 from perception.providers.odometry import DeadReckoning
@@ -130,6 +132,7 @@ PROVIDERS: Mapping[str, Mapping[str, ProviderFactory]] = {
     FIELD_FEATURE_LAST_SEEN: {"history": lambda c, ctx: FieldFeatureHistory()},
     FIELD_FEATURES: {
         "vision": lambda c, ctx: VisionFieldFeatures(c.field_detector, ctx),
+        "vision_both_cameras": lambda c, ctx: TwoCameraFieldFeatures(c.field_detector, ctx),
         "oracle": lambda c, ctx: OracleFieldFeatures(c.feature_view, ctx),
     },
     CIRCLE_MAP: {

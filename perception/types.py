@@ -240,6 +240,8 @@ class SensorFrame:
     - ``camera`` and ``camera_state``: the camera's intrinsics and its pose on the robot as the
       joints report it, or ``None`` for a robot without a camera;
     - ``image``: (H, W, 3) uint8 RGB, or ``None`` when nothing was rendered;
+    - ``bottom_image`` and ``bottom_camera_state``: the same of a second, lower camera (a Nao's
+      bottom camera, same intrinsics), or ``None`` when it is off;
     - ``sonar``: (3, E) echo distances (m) of the left/middle/right sectors, NaN-padded, or
       ``None``; ``sonar_model`` its sector geometry and noise;
     - ``sonar_ring``: (S,) ranges (m) of a ring of single sonars (a Pioneer's sixteen), one
@@ -256,6 +258,8 @@ class SensorFrame:
     camera: CameraModel | None = None
     camera_state: CameraState | None = None
     image: NDArray[np.uint8] | None = None
+    bottom_image: NDArray[np.uint8] | None = None
+    bottom_camera_state: CameraState | None = None
     sonar: FloatArray | None = None
     sonar_model: SonarModel | None = None
     sonar_ring: FloatArray | None = None

@@ -11,7 +11,7 @@ with the walk odometry and fusing each frame's pose observation from the unified
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -36,7 +36,7 @@ class VisionFieldFeatures(Provider):
     (:func:`~perception.vision.field_features.detect_field_features`)."""
 
     provides = FIELD_FEATURES
-    requires = ("image", "camera_state")
+    requires: ClassVar[tuple[str, ...]] = ("image", "camera_state")
 
     def __init__(self, config: FieldFeatureConfig, context: PerceptionContext) -> None:
         self.config = config
@@ -47,6 +47,19 @@ class VisionFieldFeatures(Provider):
         if image is None:
             raise ValueError("VisionFieldFeatures needs a rendered image, got None")
         return detect_field_features(image, self.camera, inputs["camera_state"], self.config)
+
+
+class TwoCameraFieldFeatures(VisionFieldFeatures):
+    """The field features of the top and the bottom camera's images, the top camera's first
+    (seed 004 uses both; the bottom one sees the ground at the robot's feet)."""
+
+    requires = ("image", "camera_state", "bottom_image", "bottom_camera_state")
+
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> tuple[FieldFeature, ...]:
+        bottom = detect_field_features(
+            inputs["bottom_image"], self.camera, inputs["bottom_camera_state"], self.config
+        )
+        return super().update(inputs, time_s) + bottom
 
 
 class OracleFieldFeatures(Provider):

@@ -358,6 +358,8 @@ class SplEnv(RobotEnv[WorldState]):
                 "the colour front end: pass frontend='colour' with it (or camera_mode='rendered')"
             )
         self._render_image = rendered and "image" in self.pipeline.frame_inputs
+        # the bottom camera is rendered only for a provider that reads it
+        self._render_bottom = rendered and "bottom_image" in self.pipeline.frame_inputs
         self.rig = NaoRig(
             cfg.sensors,
             self.robots[AGENT],
@@ -429,6 +431,7 @@ class SplEnv(RobotEnv[WorldState]):
             self.camera_yaw_rate_rps,
             self.np_random,
             render=self._render_image,
+            render_bottom=self._render_bottom,
             truth=truth,
         )
 

@@ -305,11 +305,14 @@ class NaoRobot:
         """The camera pose the robot's joint sensors report (no sway): robot frame."""
         return camera_state_for(self.config, self.head)
 
-    def camera_pose_world(self) -> tuple[FloatArray, FloatArray]:
-        """True camera position (3,) and rotation (3, 3) in the field frame, sway included."""
+    def camera_pose_world(
+        self, camera: Literal["top", "bottom"] = "top"
+    ) -> tuple[FloatArray, FloatArray]:
+        """True position (3,) and rotation (3, 3) of the top or bottom camera in the field
+        frame, sway included."""
         roll, pitch, bob = self.sway()
         body = rot_z(self.pose[2]) @ rot_y(pitch) @ rot_x(roll)
-        state = self.camera_state()
+        state = camera_state_for(self.config, self.head, camera)
         position = np.array([self.pose[0], self.pose[1], bob]) + body @ state.position
         rotation = rot_z(self.pose[2]) @ camera_rotation(
             state.head_yaw, state.head_pitch + state.tilt, body_roll=roll, body_pitch=pitch

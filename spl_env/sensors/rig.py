@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 
 from perception.geometry import FloatArray
 from perception.types import CameraState, GroundTruth, SensorFrame
-from spl_env.robots.nao import NaoRobot
+from spl_env.robots.nao import NaoRobot, camera_state_for
 from spl_env.sensors.camera import Camera, CameraConfig, EpisodeLighting, blur_length_px
 from spl_env.sensors.emulation.poles import GeometricCameraConfig
 from spl_env.sensors.emulation.robots import CNN_ROBOTS, VISION_ROBOTS, GeometricRobotConfig
@@ -113,10 +113,13 @@ class NaoRig:
         rng: np.random.Generator,
         *,
         render: bool,
+        render_bottom: bool = False,
         truth: GroundTruth | None = None,
     ) -> tuple[SensorFrame, dict[str, float]]:
-        """This step's frame: the image (when ``render``) or the emulated representations,
-        sonar, laser and the odometry of the walk engine's increment ``engine_delta`` (3,).
+        """This step's frame: the image (when ``render``; the bottom camera's too with
+        ``render_bottom``: pitched 39.7 degrees further down, same intrinsics) or the emulated
+        representations, sonar, laser and the odometry of the walk engine's increment
+        ``engine_delta`` (3,).
 
         ``yaw_rate_rps`` is the camera's turn rate this frame (rad/s), for motion blur;
         ``truth`` is passed on for oracle providers. Also returns the seconds spent rendering
@@ -125,13 +128,19 @@ class NaoRig:
         t0 = time.perf_counter()
         robot, cam = self.robot, self.config.camera
         camera_state = robot.camera_state()
-        image = None
+        image = bottom_image = bottom_state = None
         emulated: dict[str, Any] = {}
         if render:
             position, rotation = robot.camera_pose_world()
             image, _ = self.camera.render(
                 world, position, rotation, self.lighting, rng, yaw_rate_rps=yaw_rate_rps
             )
+            if render_bottom:
+                bottom_state = camera_state_for(robot.config, robot.head, "bottom")
+                position, rotation = robot.camera_pose_world("bottom")
+                bottom_image, _ = self.camera.render(
+                    world, position, rotation, self.lighting, rng, yaw_rate_rps=yaw_rate_rps
+                )
         if self.emulators:
             blur = blur_length_px(yaw_rate_rps, cam.exposure_time_s, cam.model.fx)
             for name, emulator in self.emulators.items():
@@ -154,6 +163,8 @@ class NaoRig:
             camera=cam.model,
             camera_state=camera_state,
             image=image,
+            bottom_image=bottom_image,
+            bottom_camera_state=bottom_state,
             sonar=sonar,
             sonar_model=self.sonar.model if self.sonar is not None else None,
             laser=laser,

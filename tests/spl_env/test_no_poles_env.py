@@ -80,3 +80,50 @@ def test_the_no_poles_ids_are_their_pole_envs_with_two_settings() -> None:
         np.testing.assert_array_equal(obs_a[key], obs_b[key])
     a.close()
     b.close()
+
+
+def test_the_bottom_camera_adds_what_it_sees_below_the_top_cameras_view() -> None:
+    """Rendered only for the provider that reads it; its frame's features join the top
+    camera's (which stay as they were: the top image is rendered first, from the same
+    generator state)."""
+    with_bottom = gym.make(
+        "SPL/ActiveVision-NoPoles-v1", field_features="vision_both_cameras", episode_s=1.0
+    )
+    top_only = gym.make("SPL/ActiveVision-NoPoles-v1", episode_s=1.0)
+    with_bottom.reset(seed=3)  # a line at the robot's feet, below the top camera's view
+    top_only.reset(seed=3)
+    frame = with_bottom.unwrapped.sensor_frame
+    assert frame.bottom_image is not None and frame.bottom_image.shape == frame.image.shape
+    assert frame.bottom_camera_state.tilt == pytest.approx(np.radians(39.7))
+    assert top_only.unwrapped.sensor_frame.bottom_image is None
+    both = with_bottom.unwrapped.perception_output["field_features"]
+    top = top_only.unwrapped.perception_output["field_features"]
+    assert len(both) > len(top)
+    for a, b in zip(both[: len(top)], top, strict=True):
+        assert a.kind == b.kind
+        np.testing.assert_array_equal(a.points, b.points)
+    # the bottom camera looks nearer the feet: its features are nearer than the top's
+    nearest_bottom = min(f.distance_m for f in both[len(top) :])
+    assert nearest_bottom < min(f.distance_m for f in top)
+    with_bottom.close()
+    top_only.close()
+
+
+def test_the_geometric_mode_emulates_both_cameras_too() -> None:
+    counts = {}
+    for provider in ("vision", "vision_both_cameras"):
+        env = gym.make(
+            "SPL/ActiveVision-NoPoles-v1", field_features=provider, episode_s=2.0, **GEOMETRIC
+        )
+        env.reset(seed=3)
+        counts[provider] = sum(
+            int(
+                env.step(np.array([0.0, 0.0], dtype=np.float32))[4]["perception"][
+                    "field_features_count"
+                ]
+            )
+            for _ in range(10)
+        )
+        assert env.unwrapped.sensor_frame.bottom_image is None  # nothing rendered
+        env.close()
+    assert counts["vision_both_cameras"] > counts["vision"]

@@ -11,17 +11,25 @@ from perception.field.features import FieldFeature
 from perception.field.field_map import FieldMap
 from perception.field.visibility import FeatureViewConfig, visible_features
 from perception.types import CameraModel, CameraState
-from spl_env.robots.nao import NaoRobot
+from spl_env.robots.nao import NaoRobot, camera_state_for
 from spl_env.sim.world import BulletWorld
 
 
 class GeometricFieldFeatures:
-    """Emulates the ``vision`` field-feature provider without rendering."""
+    """Emulates the ``vision`` field-feature provider without rendering (with ``bottom``, the
+    ``vision_both_cameras`` one: the bottom camera's features after the top one's)."""
 
-    def __init__(self, field_map: FieldMap, camera: CameraModel, config: FeatureViewConfig) -> None:
+    def __init__(
+        self,
+        field_map: FieldMap,
+        camera: CameraModel,
+        config: FeatureViewConfig,
+        bottom: bool = False,
+    ) -> None:
         self.field_map = field_map
         self.camera = camera
         self.config = config
+        self.bottom = bottom
 
     def observe(
         self,
@@ -32,6 +40,12 @@ class GeometricFieldFeatures:
         blur_px: float,
     ) -> tuple[FieldFeature, ...]:
         """This frame's field features (robot frame) from ``robot``'s true pose."""
-        return visible_features(
+        features = visible_features(
             self.field_map, robot.pose, self.camera, camera_state, self.config, rng
+        )
+        if not self.bottom:
+            return features
+        bottom = camera_state_for(robot.config, robot.head, "bottom")
+        return features + visible_features(
+            self.field_map, robot.pose, self.camera, bottom, self.config, rng
         )

@@ -57,12 +57,21 @@ def _vision_field_features(
     return GeometricFieldFeatures(field_map, sensors.camera.model, perception.feature_view)
 
 
+def _two_camera_field_features(
+    scene: SplFieldScene, robots: list[NaoRobot], sensors: RigConfig, perception: PipelineConfig
+) -> GeometricFieldFeatures:
+    field_map = FieldMap(scene.dimensions)
+    model, view = sensors.camera.model, perception.feature_view
+    return GeometricFieldFeatures(field_map, model, view, bottom=True)
+
+
 # (representation, the provider it emulates) -> how to build the emulator
 EMULATORS: Mapping[tuple[str, str], EmulatorFactory] = {
     (POLE_SIGHTINGS, "colour"): _colour_pole_sightings,
     (ROBOT_SIGHTINGS, "cnn"): _cnn_robot_sightings,
     (ROBOT_SIGHTINGS, "vision"): _vision_robot_sightings,
     (FIELD_FEATURES, "vision"): _vision_field_features,
+    (FIELD_FEATURES, "vision_both_cameras"): _two_camera_field_features,
 }
 
 
