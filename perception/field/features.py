@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
+from typing import Literal, get_args
 
 import numpy as np
 
@@ -41,16 +41,7 @@ FeatureKind = Literal[
     "penalty_mark",
     "goal_post",
 ]
-FEATURE_KINDS: tuple[FeatureKind, ...] = (
-    "line",
-    "field_edge",
-    "corner",
-    "t_junction",
-    "x_junction",
-    "centre_circle",
-    "penalty_mark",
-    "goal_post",
-)
+FEATURE_KINDS: tuple[FeatureKind, ...] = get_args(FeatureKind)
 SEGMENT_KINDS: frozenset[str] = frozenset({"line", "field_edge"})  # two points, no direction
 DIRECTED_KINDS: frozenset[str] = frozenset({"corner", "t_junction", "x_junction"})  # required
 # directions known modulo pi: the line through an X junction or the centre circle

@@ -82,7 +82,6 @@ Starts = Literal["prior", "hypotheses"]
 STARTS: tuple[Starts, ...] = ("prior", "hypotheses")
 _SAME_FIT_M = 1e-4  # runs whose RMS errors differ by less fit equally well
 PARALLEL_RAD = math.radians(10.0)  # two lines within this of each other are parallel
-RIGHT_ANGLE_TOLERANCE_RAD = math.radians(15.0)
 
 # rank of each item in the hierarchical matching (seed order, ours in between)
 RANKS = {

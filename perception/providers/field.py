@@ -127,7 +127,6 @@ class FieldFeaturePose(Provider):
         self.config = config
         self.field_map = context.field_map
         self._filter: PoseFilter | None = None
-        self.observations = 0  # pose observations fused this episode
 
     @property
     def filter(self) -> PoseFilter:
@@ -138,7 +137,6 @@ class FieldFeaturePose(Provider):
 
     def reset(self, prior: Prior) -> None:
         self._filter = PoseFilter(self.config, prior.pose)
-        self.observations = 0
 
     def update(self, inputs: Mapping[str, Any], time_s: float) -> SlamEstimate:
         pose_filter = self.filter
@@ -146,8 +144,8 @@ class FieldFeaturePose(Provider):
         features = inputs[FIELD_FEATURES]
         if features:
             result = observe_pose(features, pose_filter.pose, self.field_map, self.model)
-            if result.observation is not None and pose_filter.update(result.observation):
-                self.observations += 1
+            if result.observation is not None:
+                pose_filter.update(result.observation)
         return SlamEstimate(
             pose=pose_filter.pose,
             pose_cov=pose_filter.cov,

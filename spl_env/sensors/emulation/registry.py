@@ -50,19 +50,17 @@ def _vision_robot_sightings(
     )
 
 
-def _vision_field_features(
-    scene: SplFieldScene, robots: list[NaoRobot], sensors: RigConfig, perception: PipelineConfig
-) -> GeometricFieldFeatures:
-    field_map = FieldMap(scene.dimensions)
-    return GeometricFieldFeatures(field_map, sensors.camera.model, perception.feature_view)
+def _field_features(bottom: bool) -> EmulatorFactory:
+    """The emulator of the top camera's field features, and the bottom one's with ``bottom``."""
 
+    def build(
+        scene: SplFieldScene, robots: list[NaoRobot], sensors: RigConfig, perception: PipelineConfig
+    ) -> GeometricFieldFeatures:
+        field_map = FieldMap(scene.dimensions)
+        model, view = sensors.camera.model, perception.feature_view
+        return GeometricFieldFeatures(field_map, model, view, bottom=bottom)
 
-def _two_camera_field_features(
-    scene: SplFieldScene, robots: list[NaoRobot], sensors: RigConfig, perception: PipelineConfig
-) -> GeometricFieldFeatures:
-    field_map = FieldMap(scene.dimensions)
-    model, view = sensors.camera.model, perception.feature_view
-    return GeometricFieldFeatures(field_map, model, view, bottom=True)
+    return build
 
 
 # (representation, the provider it emulates) -> how to build the emulator
@@ -70,8 +68,8 @@ EMULATORS: Mapping[tuple[str, str], EmulatorFactory] = {
     (POLE_SIGHTINGS, "colour"): _colour_pole_sightings,
     (ROBOT_SIGHTINGS, "cnn"): _cnn_robot_sightings,
     (ROBOT_SIGHTINGS, "vision"): _vision_robot_sightings,
-    (FIELD_FEATURES, "vision"): _vision_field_features,
-    (FIELD_FEATURES, "vision_both_cameras"): _two_camera_field_features,
+    (FIELD_FEATURES, "vision"): _field_features(bottom=False),
+    (FIELD_FEATURES, "vision_both_cameras"): _field_features(bottom=True),
 }
 
 
