@@ -413,8 +413,11 @@ class DiffDriveRobot:
         (a blocked robot's wheels slip)."""
         return self.wheel_speeds * dt_s
 
-    def commit_motion(self, increment: FloatArray | None) -> None:
-        """Move by ``increment`` (3,) robot frame, or stay where blocked (``None``)."""
+    def commit_motion(
+        self, increment: FloatArray | None, contact_xy: FloatArray | None = None, dt_s: float = 0.0
+    ) -> None:
+        """Move by ``increment`` (3,) robot frame, or stay where blocked (``None``; the wheels
+        slip, whatever was hit at ``contact_xy`` over ``dt_s``)."""
         if increment is not None:
             self.pose = compose(self.pose, increment)
 

@@ -18,7 +18,15 @@ from typing import Literal
 
 import numpy as np
 
-from perception.geometry import FloatArray, camera_rotation, compose, rot_x, rot_y, rot_z
+from perception.geometry import (
+    FloatArray,
+    camera_rotation,
+    compose,
+    rot_x,
+    rot_y,
+    rot_z,
+    wrap_angle,
+)
 from perception.types import CameraState
 from perception.validation import check_positive
 from spl_env.sim.world import BulletWorld, LinkSpec, VisualPart
@@ -52,6 +60,14 @@ class RobotConfig:
     kick_reach_m: float = 0.25  # a kick reaches a ball this far ahead of the robot centre
     kick_half_width_m: float = 0.12  # ... and this far to either side
     kick_speed_mps: float = 2.0  # ball speed a kick gives
+    # A systematic veer of the body that the walk engine does not know of (rad per metre
+    # walked, + = left): the robot turns while its engine, and so its odometry, reports
+    # straight (seed 004 §5.3's uncalibrated robot had a left turn bias). 0 by default.
+    turn_bias_rad_per_m: float = 0.0
+    # A blocked robot (walking into another robot, a post or the carpet's edge) pivots away
+    # from what it hit at this rate (rad/s) while its engine reports the step it wanted
+    # (seed 004 §5.2: an arm caught on a robot turns the body). 0 by default: it just stops.
+    bump_turn_rps: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("max_speed", "max_accel"):
@@ -85,6 +101,11 @@ class RobotConfig:
         for name in ("head_pitch_joint_offset_m", "camera_tilt_rad", "bottom_camera_tilt_rad"):
             if not math.isfinite(getattr(self, name)):
                 raise ValueError(f"RobotConfig.{name} must be finite, got {getattr(self, name)}")
+        if not math.isfinite(self.turn_bias_rad_per_m):
+            raise ValueError(
+                f"RobotConfig.turn_bias_rad_per_m must be finite, got {self.turn_bias_rad_per_m}"
+            )
+        check_positive("RobotConfig", "bump_turn_rps", self.bump_turn_rps, allow_zero=True)
         for name in ("sway_roll_rad", "sway_pitch_rad", "sway_bob_m"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):
@@ -254,12 +275,28 @@ class NaoRobot:
         s, c = math.sin(omega), math.cos(omega)
         return np.array([(vx * s - vy * (1 - c)) / omega, (vx * (1 - c) + vy * s) / omega, omega])
 
-    def commit_motion(self, increment: FloatArray | None) -> None:
-        """Move by ``increment`` (3,) robot frame, or stop where blocked (``None``)."""
+    def commit_motion(
+        self, increment: FloatArray | None, contact_xy: FloatArray | None = None, dt_s: float = 0.0
+    ) -> None:
+        """Move by the walk engine's ``increment`` (3,) robot frame, the body veering by
+        ``turn_bias_rad_per_m`` per metre of it; or, blocked (``None``), stop, and pivot for
+        ``dt_s`` (s) at ``bump_turn_rps`` away from the ``contact_xy`` (2,) (m, field frame) it
+        ran into, when given."""
         if increment is None:
             self.velocity = np.zeros(3)
-        else:
-            self.pose = compose(self.pose, increment)
+            if contact_xy is not None and self.config.bump_turn_rps > 0.0:
+                self.pose = self.pose.copy()
+                self.pose[2] = wrap_angle(self.pose[2] + self._bump_turn(contact_xy, dt_s))
+            return
+        veer = self.config.turn_bias_rad_per_m * math.hypot(increment[0], increment[1])
+        self.pose = compose(self.pose, np.asarray(increment) + np.array([0.0, 0.0, veer]))
+
+    def _bump_turn(self, contact_xy: FloatArray, dt_s: float) -> float:
+        """The pivot (rad) away from ``contact_xy`` (2,) over ``dt_s``: right (negative) when the
+        contact lies to the left of the heading, left otherwise."""
+        dx, dy = contact_xy[0] - self.pose[0], contact_xy[1] - self.pose[1]
+        side = -math.sin(self.pose[2]) * dx + math.cos(self.pose[2]) * dy
+        return -math.copysign(self.config.bump_turn_rps * dt_s, side)
 
     def kick_velocity(self, ball_xy: FloatArray) -> FloatArray | None:
         """Ball velocity (2,) (m/s, field frame) of a kick now, or None when the ball (2,) is

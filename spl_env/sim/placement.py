@@ -54,7 +54,9 @@ class Mobile(Protocol):
 
     def walk_step(self, command: FloatArray, dt_s: float) -> FloatArray: ...
 
-    def commit_motion(self, increment: FloatArray | None) -> None: ...
+    def commit_motion(
+        self, increment: FloatArray | None, contact_xy: FloatArray | None = None, dt_s: float = 0.0
+    ) -> None: ...
 
     def sync(self) -> None: ...
 
@@ -71,15 +73,25 @@ class Placement:
     def collides(self, xy: FloatArray, robots: Sequence[Mobile], clearance: float) -> bool:
         """Whether a robot at ``xy`` (2,) overlaps one of ``robots``, a post or a pole, or leaves
         the carpet, with ``clearance`` (m) to spare."""
+        return self.obstruction(xy, robots, clearance) is not None
+
+    def obstruction(
+        self, xy: FloatArray, robots: Sequence[Mobile], clearance: float
+    ) -> FloatArray | None:
+        """Where a robot at ``xy`` (2,) would touch what it overlaps (with ``clearance`` m to
+        spare): the point (2,) (m) of the carpet's edge it crosses, or the centre of the first
+        robot, post or pole it overlaps; None when it is clear."""
         r = self.robot_radius_m
-        carpet_l, carpet_w = self.dimensions.carpet_size_m
-        if abs(xy[0]) > carpet_l / 2 - r or abs(xy[1]) > carpet_w / 2 - r:
-            return True
+        half_l, half_w = (size / 2 - r for size in self.dimensions.carpet_size_m)
+        if abs(xy[0]) > half_l or abs(xy[1]) > half_w:
+            edge = np.array([np.clip(xy[0], -half_l, half_l), np.clip(xy[1], -half_w, half_w)])
+            return edge + np.array([r * np.sign(xy[0] - edge[0]), r * np.sign(xy[1] - edge[1])])
         for robot in robots:
             if math.hypot(*(robot.pose[:2] - xy)) < 2 * r + clearance:
-                return True
+                return np.asarray(robot.pose[:2], dtype=np.float64).copy()
         d = np.hypot(self.obstacles[:, 0] - xy[0], self.obstacles[:, 1] - xy[1])
-        return bool(np.any(d < r + self.obstacles[:, 2] + clearance))
+        hit = np.flatnonzero(d < r + self.obstacles[:, 2] + clearance)
+        return self.obstacles[hit[0], :2].copy() if hit.size else None
 
     def random_pose(self, rng: np.random.Generator, margin_m: float) -> FloatArray:
         """A pose (3,) drawn uniformly inside the field lines shrunk by ``margin_m`` (m), any
@@ -110,11 +122,15 @@ class Placement:
         body was blocked.
 
         A blocked robot stays where it is while its walk engine (and so its odometry) believes
-        it stepped: the slip a real Nao sees when it walks into an obstacle.
+        it stepped: the slip a real Nao sees when it walks into an obstacle. It is told what it
+        ran into (:meth:`obstruction`), so that a Nao may pivot away from it.
         """
         increment = robot.walk_step(command, dt_s)
         new_xy = transform_points(robot.pose, increment[None, :2])[0]
-        blocked = self.collides(new_xy, others, clearance=0.0)
-        robot.commit_motion(None if blocked else increment)
+        contact = self.obstruction(new_xy, others, clearance=0.0)
+        if contact is None:
+            robot.commit_motion(increment)
+        else:
+            robot.commit_motion(None, contact, dt_s)
         robot.sync()
-        return increment, blocked
+        return increment, contact is not None

@@ -117,3 +117,46 @@ def test_walk_moves_by_the_engine_increment_unless_blocked(field: Field) -> None
     np.testing.assert_array_equal(ours.velocity, np.zeros(3))  # and it stopped
     # the physics world follows the robot's pose
     np.testing.assert_allclose(field.world.position(ours.name)[:2], ours.pose[:2], atol=1e-9)
+
+
+def test_obstruction_names_what_a_step_would_hit(field: Field) -> None:
+    placement, robots = field.placement, field.robots
+    robots[0].place(np.array([1.0, 1.0, 0.0]))
+    assert placement.obstruction(np.array([-1.0, -1.0]), robots[:1], clearance=0.0) is None
+    hit = placement.obstruction(np.array([1.0 + 2 * R - 0.01, 1.0]), robots[:1], clearance=0.0)
+    np.testing.assert_allclose(hit, [1.0, 1.0])  # the other robot's centre
+    carpet_l = field.scene.dimensions.carpet_size_m[0]
+    edge = placement.obstruction(np.array([carpet_l / 2 - R + 0.01, 0.3]), [], clearance=0.0)
+    np.testing.assert_allclose(edge, [carpet_l / 2, 0.3])  # the edge point beside it
+
+
+def test_a_turn_bias_veers_the_body_but_not_the_engine() -> None:
+    world = BulletWorld(time_step_s=0.01)
+    bias = 0.2  # rad per metre
+    robot = NaoRobot(world, "veering", team=0, config=RobotConfig(turn_bias_rad_per_m=bias))
+    robot.place(np.array([0.0, 0.0, 0.0]))
+    walked = 0.0
+    for _ in range(30):
+        increment = robot.walk_step(np.array([0.2, 0.0, 0.0]), 0.1)
+        assert increment[2] == 0.0  # the engine believes it walks straight
+        robot.commit_motion(increment)
+        walked += float(np.hypot(increment[0], increment[1]))
+    assert robot.pose[2] == pytest.approx(bias * walked, rel=1e-9)
+    assert robot.pose[1] > 0.0  # veering left
+    world.close()
+
+
+def test_a_blocked_robot_pivots_away_from_what_it_hit(field: Field) -> None:
+    world = BulletWorld(time_step_s=0.01)
+    rate = 0.6
+    robot = NaoRobot(world, "bumped", team=0, config=RobotConfig(bump_turn_rps=rate))
+    other = NaoRobot(world, "wall", team=1, config=RobotConfig())
+    placement = field.placement
+    for side, turn in ((0.1, -1.0), (-0.1, 1.0)):  # contact to the left turns right
+        robot.place(np.array([0.0, 0.0, 0.0]))
+        other.place(np.array([2 * R - 0.01, side, 0.0]))
+        robot.velocity = np.array([0.25, 0.0, 0.0])
+        increment, blocked = placement.walk(robot, np.array([0.25, 0.0, 0.0]), 0.1, [other])
+        assert blocked and increment[0] > 0.0
+        np.testing.assert_allclose(robot.pose, [0.0, 0.0, turn * rate * 0.1], atol=1e-12)
+    world.close()
