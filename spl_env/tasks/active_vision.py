@@ -23,18 +23,25 @@ class ActiveVisionTaskConfig(HeadControlTaskConfig):
     body_behaviour: str = "patrol"  # our walk: "patrol" (random waypoints) or "square"
     walker: WalkerConfig = field(default_factory=WalkerConfig)  # our robot's walking
     square_side_m: float = 1.8  # side of the "square" walk (seed 000's one-minute square)
+    square_clockwise: bool = False  # the square's sense (UMBmark walks both)
 
     def __post_init__(self) -> None:
         super().__post_init__()
         owner = "ActiveVisionTaskConfig"
         check_choice(owner, "body_behaviour", self.body_behaviour, BODY_BEHAVIOURS)
         check_positive(owner, "square_side_m", self.square_side_m, upper=5.0, upper_inclusive=True)
+        if not isinstance(self.square_clockwise, bool):
+            raise TypeError(
+                f"{owner}.square_clockwise must be a bool, got "
+                f"{type(self.square_clockwise).__name__}"
+            )
 
 
 class ActiveVisionTask(HeadControlTask):
     """``body_behaviour="patrol"``: random waypoints from a random start; ``"square"``: seed
-    000's square walk (corners turned in place) around a random centre. The walk steers on the
-    true pose: it is scenery, not the policy's concern."""
+    000's square walk (corners turned in place) around a random centre, counter-clockwise from
+    its south-west corner facing east (clockwise: facing north). The walk steers on the true
+    pose: it is scenery, not the policy's concern."""
 
     config: ActiveVisionTaskConfig
 
@@ -47,8 +54,12 @@ class ActiveVisionTask(HeadControlTask):
         if self.config.body_behaviour == "square":
             h = self.config.square_side_m / 2
             centre = np.array([rng.uniform(-1.0, 1.0), rng.uniform(-0.5, 0.5)])
-            waypoints = centre + np.array([[h, -h], [h, h], [-h, h], [-h, -h]])
-            start = np.array([*waypoints[3], 0.0])
+            corners = np.array([[h, -h], [h, h], [-h, h], [-h, -h]])
+            if self.config.square_clockwise:
+                corners = corners[[2, 1, 0, 3]]
+            waypoints = centre + corners
+            first_leg = waypoints[0] - waypoints[3]
+            start = np.array([*waypoints[3], np.arctan2(first_leg[1], first_leg[0])])
         else:
             start = self.context.placement.random_pose(rng, margin_m=1.0)
         self._walker = WaypointWalker(

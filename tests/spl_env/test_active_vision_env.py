@@ -236,3 +236,27 @@ def test_every_id_is_registered_with_its_own_env_class() -> None:
         ActiveVisionRobotsEnv,
         LookAroundEnv,
     ]
+
+
+@pytest.mark.parametrize("clockwise", [False, True])
+def test_the_square_walk_goes_round_in_the_sense_asked_for(clockwise: bool) -> None:
+    env = gym.make(
+        "SPL/ActiveVision-v1",
+        camera_mode="geometric",
+        frontend="colour",
+        body_behaviour="square",
+        square_side_m=1.0,
+        n_other_robots=0,  # nothing to block the walk
+        **{"task.square_clockwise": clockwise},
+    )
+    env.reset(seed=4)
+    robot = env.unwrapped.robots[0]
+    path = [robot.pose.copy()]
+    for _ in range(400):  # a lap: four 6.7 s legs and four turns
+        env.step(np.zeros(2, dtype=np.float32))
+        path.append(robot.pose.copy())
+    xy = np.array(path)[:, :2] - path[0][:2]
+    # the signed area the path sweeps (shoelace): positive counter-clockwise
+    area = 0.5 * float(np.sum(xy[:-1, 0] * xy[1:, 1] - xy[1:, 0] * xy[:-1, 1]))
+    assert (area < -0.5) if clockwise else (area > 0.5)  # a lap sweeps about 1 m2, signed
+    env.close()
