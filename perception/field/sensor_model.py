@@ -16,7 +16,8 @@ them in the same frame; the field edges are then dropped:
   junction that has a map post where the seen post lies in the junction's own frame (within
   ``relation_tolerance_m``); a corner with a field edge may only match a map corner with a map
   edge as far away and as turned; a line parallel to a field edge may only match a map line as
-  far from a map edge: the seed's sub-categories, found from the map rather than listed.
+  far from a map edge: the seed's sub-categories, found from the map rather than listed (the
+  map's side of each relation worked out once per map).
 
 **Hierarchical matching**, in the seed's order: two posts, parallel lines, corners, T junctions,
 a single post, then (ours) penalty marks, the centre circle and X junctions, then single lines;
@@ -58,12 +59,12 @@ import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 from typing import Literal
 
 import numpy as np
 
-from perception.field.features import AXIAL_KINDS, FeatureKind, FieldFeature
+from perception.field.features import AXIAL_KINDS, FEATURE_KINDS, FeatureKind, FieldFeature
 from perception.field.field_map import FieldMap, MapFeature
 from perception.field.pose_observation import PoseObservation
 from perception.geometry import FloatArray, wrap_angle
@@ -76,6 +77,7 @@ from perception.validation import (
 )
 
 _J = np.array([[0.0, -1.0], [1.0, 0.0]])  # a quarter turn: d Rot(a) / da at a = 0
+_BOTH = np.ones(2)  # a point pair's mask: both components counted
 MatchOrder = Literal["seed", "candidates"]
 MATCH_ORDERS: tuple[MatchOrder, ...] = ("seed", "candidates")
 Starts = Literal["prior", "hypotheses"]
@@ -153,10 +155,15 @@ class MatchItem:
     features: tuple[FieldFeature, ...]
     candidates: tuple[tuple[MapFeature, ...], ...]
 
+    @cached_property
+    def distances_m(self) -> tuple[float, ...]:
+        """Its features' distances (m) from the robot, worked out once."""
+        return tuple(f.distance_m for f in self.features)
+
     @property
     def distance_m(self) -> float:
         """The nearest of its features' distances from the robot (m)."""
-        return min(f.distance_m for f in self.features)
+        return min(self.distances_m)
 
     @cached_property
     def targets(self) -> tuple[tuple[FloatArray, FloatArray], ...]:
@@ -273,29 +280,89 @@ def match_items(
     posts = [f for f in features if f.kind == "goal_post"]
     lines = _merged_lines([f for f in features if f.kind == "line"], config)
     features = [f for f in features if f.kind != "line"] + lines
+    tables = _map_tables(field_map)
     items: list[MatchItem] = []
-    paired_posts = _two_posts(posts, field_map, config)
+    paired_posts = _two_posts(posts, tables, field_map, config)
     items += paired_posts
     used = {id(f) for item in paired_posts for f in item.features}
-    parallel = _parallel_lines(lines, field_map, config)
+    parallel = _parallel_lines(lines, tables, config)
     items += parallel
     used |= {id(f) for item in parallel for f in item.features}
     for f in features:
         if f.kind == "field_edge" or id(f) in used:
             continue
-        candidates: tuple[tuple[MapFeature, ...], ...] = tuple(
-            (m,) for m in field_map.of_kind(f.kind)
-        )
+        candidates = tables.singles[f.kind]
         if f.kind == "t_junction":
-            candidates = _related(f, posts, "goal_post", candidates, field_map, config)
+            candidates = _related(f, posts, "goal_post", tables, config)
         elif f.kind == "corner" or f.kind == "line":
-            candidates = _related(f, edges, "field_edge", candidates, field_map, config)
+            candidates = _related(f, edges, "field_edge", tables, config)
         items.append(MatchItem(f.kind, (f,), candidates))
     if config.order == "candidates":
         return sorted(
             items, key=lambda item: (len(item.candidates), RANKS[item.kind], item.distance_m)
         )
     return sorted(items, key=lambda item: (RANKS[item.kind], item.distance_m))
+
+
+@dataclass(frozen=True, eq=False)
+class _MapTables:
+    """What the pre-processing asks of one map, worked out once (:func:`_map_tables`).
+
+    ``singles``: per kind, the map's features of that kind as one-feature candidates, in map
+    order; ``relations``: per (kind, reference kind) of :data:`_RELATED`, the
+    :func:`_relation` (C, M, 2) of each of the C map features of the kind to each of the M
+    map references; ``goal_width_m`` (m); ``post_pairs``: the ordered pairs of map posts a
+    goal's width apart; ``parallel_pairs``: the ordered pairs of parallel map lines, and
+    ``parallel_gaps_m`` (K,) (m), their :func:`_line_gap` s.
+    """
+
+    singles: dict[str, tuple[tuple[MapFeature, ...], ...]]
+    relations: dict[tuple[str, str], FloatArray]
+    goal_width_m: float
+    post_pairs: tuple[tuple[MapFeature, MapFeature], ...]
+    parallel_pairs: tuple[tuple[MapFeature, MapFeature], ...]
+    parallel_gaps_m: FloatArray
+
+
+# (kind, reference kind): the relations that restrict a kind's candidates (module docstring)
+_RELATED: tuple[tuple[FeatureKind, FeatureKind], ...] = (
+    ("t_junction", "goal_post"),
+    ("corner", "field_edge"),
+    ("line", "field_edge"),
+)
+
+
+@lru_cache(maxsize=8)
+def _map_tables(field_map: FieldMap) -> _MapTables:
+    """The tables of ``field_map`` (kept for the last few maps, by identity): its features
+    do not change, so the relations among them are worked out once, not per frame."""
+    relations: dict[tuple[str, str], FloatArray] = {}
+    for kind, reference_kind in _RELATED:
+        features, references = field_map.of_kind(kind), field_map.of_kind(reference_kind)
+        relations[kind, reference_kind] = np.array(
+            [[_relation(f, r) for r in references] for f in features], dtype=np.float64
+        ).reshape(len(features), len(references), 2)
+    posts = field_map.of_kind("goal_post")
+    goal_posts = field_map.dims.goal_posts()
+    width = float(np.linalg.norm(goal_posts[1] - goal_posts[0]))
+    lines = field_map.of_kind("line")
+    parallel = [
+        (a, b)
+        for a, b in itertools.permutations(lines, 2)
+        if _axial_difference(_segment_angle(a.points), _segment_angle(b.points)) < 1e-6
+    ]
+    return _MapTables(
+        singles={kind: tuple((m,) for m in field_map.of_kind(kind)) for kind in FEATURE_KINDS},
+        relations=relations,
+        goal_width_m=width,
+        post_pairs=tuple(
+            (a, b)
+            for a, b in itertools.permutations(posts, 2)
+            if abs(float(np.linalg.norm(b.points[0] - a.points[0])) - width) < 1e-6
+        ),
+        parallel_pairs=tuple(parallel),
+        parallel_gaps_m=np.array([_line_gap(a.points, b.points) for a, b in parallel]),
+    )
 
 
 def _segment_angle(points: FloatArray) -> float:
@@ -316,22 +383,19 @@ def _line_gap(a: FloatArray, b: FloatArray) -> float:
 
 
 def _two_posts(
-    posts: list[FieldFeature], field_map: FieldMap, config: SensorModelConfig
+    posts: list[FieldFeature], tables: _MapTables, field_map: FieldMap, config: SensorModelConfig
 ) -> list[MatchItem]:
     """The first pair of seen posts about a goal's width apart, as a two-posts item."""
-    width = float(np.linalg.norm(field_map.dims.goal_posts()[1] - field_map.dims.goal_posts()[0]))
-    map_posts = field_map.of_kind("goal_post")
     for a, b in itertools.combinations(posts, 2):
         gap = b.points[0] - a.points[0]
-        if abs(float(np.linalg.norm(gap)) - width) > config.relation_tolerance_m:
+        if abs(float(np.linalg.norm(gap)) - tables.goal_width_m) > config.relation_tolerance_m:
             continue
         # both orders of a goal's posts fit the pair; the one that puts the robot off the
         # carpet (behind the goal) is no candidate
         candidates = tuple(
             (ma, mb)
-            for ma, mb in itertools.permutations(map_posts, 2)
-            if abs(float(np.linalg.norm(mb.points[0] - ma.points[0])) - width) < 1e-6
-            and _on_carpet(_implied_origin(a, b, ma, mb), field_map)
+            for ma, mb in tables.post_pairs
+            if _on_carpet(_implied_origin(a, b, ma, mb), field_map)
         )
         return [MatchItem("two_posts", (a, b), candidates)]
     return []
@@ -354,21 +418,18 @@ def _on_carpet(point: FloatArray, field_map: FieldMap) -> bool:
 
 
 def _parallel_lines(
-    lines: list[FieldFeature], field_map: FieldMap, config: SensorModelConfig
+    lines: list[FieldFeature], tables: _MapTables, config: SensorModelConfig
 ) -> list[MatchItem]:
     """The first pair of seen parallel lines, with the map line pairs as far apart."""
-    map_lines = field_map.of_kind("line")
     for a, b in itertools.combinations(lines, 2):
         if _axial_difference(_segment_angle(a.points), _segment_angle(b.points)) > PARALLEL_RAD:
             continue
         gap = _line_gap(a.points, b.points)
         if gap <= config.relation_tolerance_m:
             continue  # one line (or two collinear ones), not a parallel pair
+        fits = np.abs(tables.parallel_gaps_m - gap) <= config.relation_tolerance_m
         candidates = tuple(
-            (ma, mb)
-            for ma, mb in itertools.permutations(map_lines, 2)
-            if _axial_difference(_segment_angle(ma.points), _segment_angle(mb.points)) < 1e-6
-            and abs(_line_gap(ma.points, mb.points) - gap) <= config.relation_tolerance_m
+            pair for pair, fit in zip(tables.parallel_pairs, fits, strict=True) if fit
         )
         if candidates:
             return [MatchItem("parallel_lines", (a, b), candidates)]
@@ -433,12 +494,13 @@ def _related(
     feature: FieldFeature,
     references: list[FieldFeature],
     reference_kind: FeatureKind,
-    candidates: tuple[tuple[MapFeature, ...], ...],
-    field_map: FieldMap,
+    tables: _MapTables,
     config: SensorModelConfig,
 ) -> tuple[tuple[MapFeature, ...], ...]:
-    """``candidates`` restricted to those with a map reference placed as a seen one is (the
-    seen references within ``relation_range_m`` of the feature; lines need a parallel edge)."""
+    """The map features of the feature's kind as its candidates, restricted to those with a
+    map reference placed as each seen one is (the seen references within
+    ``relation_range_m`` of the feature; lines need a parallel edge)."""
+    candidates = tables.singles[feature.kind]
     near = [
         r
         for r in references
@@ -447,22 +509,16 @@ def _related(
     ]
     if not near:
         return candidates
-    map_references = field_map.of_kind(reference_kind)
     scale = np.array([1.0, config.direction_scale_m_per_rad])
     if reference_kind == "goal_post":
         scale = np.ones(2)
-    kept = tuple(
-        c
-        for c in candidates
-        if all(
-            any(
-                np.linalg.norm((_relation(c[0], m) - _relation(feature, r)) * scale)
-                <= config.relation_tolerance_m
-                for m in map_references
-            )
-            for r in near
-        )
-    )
+    relations = tables.relations[feature.kind, reference_kind]  # (C, M, 2)
+    fits = np.ones(len(candidates), dtype=bool)
+    for r in near:
+        gaps = (relations - _relation(feature, r)) * scale
+        # the norm as np.linalg.norm takes it (a dot product), to the last bit
+        fits &= (np.sqrt(np.vecdot(gaps, gaps)) <= config.relation_tolerance_m).any(axis=1)
+    kept = tuple(c for c, fit in zip(candidates, fits, strict=True) if fit)
     return kept or candidates  # no map feature fits the relation: noise or a false detection
 
 
@@ -479,11 +535,13 @@ def _place(pose: FloatArray, points: FloatArray) -> FloatArray:
     return points @ np.array([[c, s], [-s, c]]) + pose[:2]
 
 
-def _segment_distances(point: FloatArray, segments: FloatArray) -> FloatArray:
-    """Distances (C,) from ``point`` (2,) to each of ``segments`` (C, 2, 2)."""
+def _segment_distances(points: FloatArray, segments: FloatArray) -> FloatArray:
+    """Distances (P, C) from each of ``points`` (P, 2) to each of ``segments`` (C, 2, 2)."""
     a, d = segments[:, 0], segments[:, 1] - segments[:, 0]
-    t = np.clip(np.einsum("ci,ci->c", point - a, d) / np.einsum("ci,ci->c", d, d), 0.0, 1.0)
-    return np.hypot(*(point - (a + t[:, None] * d)).T)
+    offsets = points[:, None] - a  # (P, C, 2)
+    t = np.clip(np.einsum("pci,ci->pc", offsets, d) / np.einsum("ci,ci->c", d, d), 0.0, 1.0)
+    gaps = points[:, None] - (a + t[..., None] * d)
+    return np.hypot(gaps[..., 0], gaps[..., 1])
 
 
 def _costs(item: MatchItem, pose: FloatArray, config: SensorModelConfig) -> FloatArray:
@@ -494,13 +552,15 @@ def _costs(item: MatchItem, pose: FloatArray, config: SensorModelConfig) -> Floa
     for feature, (points, directions) in zip(item.features, item.targets, strict=True):
         placed = _place(pose, feature.points)
         if feature.kind == "line":
-            total += sum(_segment_distances(p, points) for p in placed)
+            total += _segment_distances(placed, points).sum(axis=0)
             continue
         total += np.hypot(*(placed[0] - points[:, 0]).T)
         if feature.direction is not None:
-            gap = np.abs(wrap_angle(feature.direction + pose[2] - directions))
+            turn = feature.direction + pose[2] - directions
             if feature.kind in AXIAL_KINDS:
-                gap = np.abs(wrap_angle(2.0 * (feature.direction + pose[2] - directions))) / 2
+                gap = np.abs(wrap_angle(2.0 * turn)) / 2
+            else:
+                gap = np.abs(wrap_angle(turn))
             total += config.direction_scale_m_per_rad * np.nan_to_num(gap, nan=0.0)
     return total
 
@@ -509,6 +569,8 @@ def _nearest(
     item: MatchItem, pose: FloatArray, config: SensorModelConfig
 ) -> tuple[MapFeature, ...]:
     """The candidate nearest the item placed from ``pose`` (the first of equals)."""
+    if len(item.candidates) == 1:
+        return item.candidates[0]
     return item.candidates[int(np.argmin(_costs(item, pose, config)))]
 
 
@@ -553,14 +615,15 @@ def _unit(angle: float) -> FloatArray:
 
 
 @dataclass(frozen=True)
-class _Pair:
-    """A point pair: the feature's point ``robot`` (2,) (robot frame), its map target ``q``
-    (2,) (field frame), the counted components ``mask`` (2,) and the weight ``w``."""
+class _Pairs:
+    """N point pairs: the features' points ``robot`` (N, 2) (robot frame), their map targets
+    ``q`` (N, 2) (field frame), the counted components ``mask`` (N, 2) (1 or 0) and the
+    weights ``w`` (N,)."""
 
     robot: FloatArray
     q: FloatArray
     mask: FloatArray
-    w: float
+    w: FloatArray
 
 
 def _point_pairs(
@@ -568,59 +631,66 @@ def _point_pairs(
     chosen: list[tuple[MapFeature, ...]],
     pose: FloatArray,
     config: SensorModelConfig,
-) -> list[_Pair]:
-    pairs: list[_Pair] = []
+) -> _Pairs:
+    """The point pairs of ``items`` matched to ``chosen`` at ``pose`` (module docstring)."""
+    robot: list[FloatArray] = []
+    q: list[FloatArray] = []
+    mask: list[FloatArray] = []
+    w: list[float] = []
     for item, targets in zip(items, chosen, strict=True):
-        for feature, target in zip(item.features, targets, strict=True):
-            w = _weight(feature, config)
+        for feature, distance, target in zip(item.features, item.distances_m, targets, strict=True):
+            weight = _weight(distance, config)
             if feature.kind == "line":
-                # lines run along x or y: count only the component across the line (eqs. 6-7)
-                mask = _across(target)
-                for end, placed in zip(feature.points, _place(pose, feature.points), strict=True):
-                    foot = placed * (1.0 - mask) + target.points[0] * mask
-                    pairs.append(_Pair(end, foot, mask, w))
+                # lines run along x or y: count only the component across the line (eqs. 6-7),
+                # where an end's foot on the map line lies at the line's own coordinate
+                across = _across(target)
+                robot += [feature.points[0], feature.points[1]]
+                q += [target.points[0], target.points[0]]
+                mask += [across, across]
+                w += [weight, weight]
                 continue
-            pairs.append(_Pair(feature.points[0], target.points[0], np.ones(2), w))
+            robot.append(feature.points[0])
+            q.append(target.points[0])
+            mask.append(_BOTH)
+            w.append(weight)
             if feature.direction is not None and target.direction is not None:
                 arm = config.junction_arm_m
                 towards = target.direction
                 gap = abs(float(wrap_angle(feature.direction + pose[2] - towards)))
                 if feature.kind in AXIAL_KINDS and gap > math.pi / 2:
                     towards += math.pi  # the map direction nearer the placed one
-                seen = feature.points[0] + arm * _unit(feature.direction)
-                pairs.append(_Pair(seen, target.points[0] + arm * _unit(towards), np.ones(2), w))
-    return pairs
+                robot.append(feature.points[0] + arm * _unit(feature.direction))
+                q.append(target.points[0] + arm * _unit(towards))
+                mask.append(_BOTH)
+                w.append(weight)
+    return _Pairs(np.array(robot), np.array(q), np.array(mask), np.array(w))
 
 
-def _step(pose: FloatArray, pairs: list[_Pair]) -> FloatArray:
+def _step(pose: FloatArray, pairs: _Pairs) -> FloatArray:
     """One least-squares step (module docstring): the new pose."""
-    p = np.array([_place(pose, pair.robot[None])[0] for pair in pairs])
-    q = np.array([pair.q for pair in pairs])
-    masks = np.array([pair.mask for pair in pairs])
-    w = np.array([pair.w for pair in pairs])
+    p = _place(pose, pairs.robot)
+    w = pairs.w
     centre = (w[:, None] * p).sum(axis=0) / w.sum()
-    rows, targets = [], []
-    for pi, qi, mi, wi in zip(p, q, masks, w, strict=True):
-        lever = _J @ (pi - centre)
-        for axis in (0, 1):
-            if mi[axis]:
-                unit = np.zeros(2)
-                unit[axis] = 1.0
-                rows.append(math.sqrt(wi) * np.array([unit[0], unit[1], lever[axis]]))
-                targets.append(math.sqrt(wi) * (qi[axis] - pi[axis]))
-    t_x, t_y, dtheta = np.linalg.lstsq(np.array(rows), np.array(targets), rcond=None)[0]
+    # per pair and axis, the row (d t_x, d t_y, d dtheta) and its target, weighted; the
+    # counted ones in pair order
+    root = np.sqrt(w)
+    rows = np.zeros((len(w), 2, 3))
+    rows[:, 0, 0] = rows[:, 1, 1] = 1.0
+    rows[:, :, 2] = (p - centre) @ _J.T  # the levers
+    rows *= root[:, None, None]
+    targets = root[:, None] * (pairs.q - p)
+    counted = pairs.mask.astype(bool)
+    t_x, t_y, dtheta = np.linalg.lstsq(rows[counted], targets[counted], rcond=None)[0]
     c, s = math.cos(dtheta), math.sin(dtheta)
     turned = centre + np.array([[c, -s], [s, c]]) @ (pose[:2] - centre) + np.array([t_x, t_y])
     return np.array([turned[0], turned[1], float(wrap_angle(pose[2] + dtheta))])
 
 
-def _error(pose: FloatArray, pairs: list[_Pair]) -> float:
+def _error(pose: FloatArray, pairs: _Pairs) -> float:
     """Weighted mean squared residual (m²) of the point pairs placed from ``pose`` (eq. 1,
     counted components only)."""
-    p = _place(pose, np.array([pair.robot for pair in pairs]))
-    residual = np.array([pair.mask * (pair.q - pi) for pair, pi in zip(pairs, p, strict=True)])
-    w = np.array([pair.w for pair in pairs])
-    return float((w * (residual**2).sum(axis=1)).sum() / w.sum())
+    residual = pairs.mask * (pairs.q - _place(pose, pairs.robot))
+    return float((pairs.w * (residual**2).sum(axis=1)).sum() / pairs.w.sum())
 
 
 def _information(
@@ -638,8 +708,8 @@ def _information(
     sources: list[dict[int, float]] = []  # per row: its error's coefficient per noise source
     noise: list[float] = []  # per independent noise source: its variance
     for item, targets in zip(items, chosen, strict=True):
-        for feature, target in zip(item.features, targets, strict=True):
-            w = _weight(feature, config)
+        for feature, distance, target in zip(item.features, item.distances_m, targets, strict=True):
+            w = _weight(distance, config)
             if feature.kind == "line":
                 normal = _across(target)
                 for end, cov in zip(feature.points, feature.cov, strict=True):
@@ -670,21 +740,24 @@ def _information(
                         source[vertex + 2] = float(swing[axis])
                     sources.append(source)
     A = np.array(rows)
-    W = np.diag(weights)
+    W = np.array(weights)  # the weight matrix's diagonal
     B = np.zeros((len(rows), len(noise)))
     for r, source in enumerate(sources):
         for k, value in source.items():
             B[r, k] = value
-    error_cov = B @ np.diag(noise) @ B.T
-    normal_inverse = np.linalg.pinv(A.T @ W @ A, rcond=1e-10, hermitian=True)
-    cov = normal_inverse @ A.T @ W @ error_cov @ W @ A @ normal_inverse
+    # products with the diagonal weights and noise as the scalings of columns they are (in C
+    # order, which sums them as the matrix products did, to the last bit)
+    error_cov = (B * np.array(noise)) @ B.T
+    normal = np.ascontiguousarray(A.T * W) @ A
+    normal_inverse = np.linalg.pinv(normal, rcond=1e-10, hermitian=True)
+    cov = ((((normal_inverse @ A.T) * W) @ error_cov) * W) @ A @ normal_inverse
     information = np.linalg.pinv(0.5 * (cov + cov.T), rcond=1e-10, hermitian=True)
     return 0.5 * (information + information.T)
 
 
-def _weight(feature: FieldFeature, config: SensorModelConfig) -> float:
-    """A feature's pairs' weight: the inverse of its distance (m) from the robot."""
-    return 1.0 / max(feature.distance_m, config.min_weight_distance_m)
+def _weight(distance_m: float, config: SensorModelConfig) -> float:
+    """The weight of a feature's pairs: the inverse of its distance (m) from the robot."""
+    return 1.0 / max(distance_m, config.min_weight_distance_m)
 
 
 def _across(target: MapFeature) -> FloatArray:

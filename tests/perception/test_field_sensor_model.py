@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 
+from perception.field.dimensions import FieldDimensions
 from perception.field.features import FieldFeature
 from perception.field.field_map import FieldMap, MapFeature
 from perception.field.sensor_model import SensorModelConfig, match_items, observe_pose
@@ -170,6 +171,24 @@ def test_an_edge_beside_a_corner_or_a_line_keeps_only_outer_ones() -> None:
     assert by_kind["corner"] == {f.name for f in FIELD.of_kind("corner") if "field" in f.name}
     assert by_kind["line"] == {"touch_line_-y", "touch_line_+y", "goal_line_-x", "goal_line_+x"}
     assert "field_edge" not in by_kind  # the edges only sort the others
+
+
+def test_each_map_restricts_candidates_by_its_own_relations() -> None:
+    # the map's side of the relations is worked out once per map: a map with a wider border
+    # has no corner 0.7 m from an edge (all kept), and the first map's answer is unchanged
+    pose = np.array([3.5, 2.0, 0.6])
+    edge = seen(pose, "field_edge_+y", np.array([[2.5, 3.7], [5.0, 3.7]]))
+    features = [edge, seen(pose, "corner_field_+x_+y")]
+    wide = FieldMap(FieldDimensions(border_strip_m=1.5))
+
+    def corners(field_map: FieldMap) -> set[str]:
+        (item,) = match_items(features, field_map, CONFIG)
+        return {c[0].name for c in item.candidates}
+
+    field_corners = {f.name for f in FIELD.of_kind("corner") if "field" in f.name}
+    assert corners(FIELD) == field_corners
+    assert corners(wide) == {f.name for f in wide.of_kind("corner")}
+    assert corners(FIELD) == field_corners
 
 
 def test_features_that_do_not_fit_together_are_refused() -> None:
