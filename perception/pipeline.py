@@ -11,19 +11,22 @@ Provider choice, by representation (:data:`PROVIDERS`; the defaults of
 :class:`PipelineConfig` in brackets)::
 
     image  ──► image_detections [cnn] ──► pole_sightings [cnn | colour | oracle]
-                                              │
-    odometry_delta ───────────────────────────┼──► self_pose [ekf_slam | oracle] ──┐
-    odometry_delta, laser ──► self_pose [circle_slam]
+                                              │             └──► pole_last_seen [history]
+    odometry ─────────────────────────────────┴──► self_pose [ekf_slam | oracle] ──┐
+    odometry, laser ──► self_pose [circle_slam]                                    │
     image (+ bottom_image) ──► field_features [vision | vision_both_cameras | oracle]
-                                  ──► self_pose [field_features]
-                                  └──► field_feature_last_seen [history]
-                  └──► odometry_pose            └──► pole_last_seen [history]     │
+                                  ├──► self_pose [field_features] (with odometry)  │
+                                  └──► field_feature_last_seen [history]           │
     image, sonar_observations ──► robot_sightings [vision] ──┐                     │
     image ──► robot_sightings [vision_only]                  ├──► robot_tracks [tracker]
     image_detections ──► robot_sightings [cnn | oracle] ─────┘
     sonar ──► sonar_observations [filter]
     laser, self_pose ──► circle_map [laser]
     self_pose (circle_slam) ──► circle_map [slam]
+    image ──► horizon_features [surf1d]
+    odometry_delta ──► odometry [reported]
+    odometry_delta, horizon_features, robot_sightings ──► odometry [visual]
+    odometry ──► odometry_pose [dead_reckoning]
 
 A representation an emulator delivers (``emulated``: the geometric camera mode's pole
 sightings) is read from :attr:`perception.types.SensorFrame.emulated` instead of a provider.
@@ -43,6 +46,7 @@ from perception.field.pose_filter import PoseFilterConfig
 from perception.field.sensor_model import SensorModelConfig
 from perception.field.visibility import FeatureViewConfig
 from perception.geometry import FloatArray
+from perception.landmarks.horizon_features import HorizonFeatureConfig
 from perception.providers.base import PerceptionContext, Provider
 from perception.providers.circle_slam import CircleSlamProvider, SlamCircleMap
 from perception.providers.circles import LaserCircleMap
@@ -52,6 +56,12 @@ from perception.providers.field import (
     OracleFieldFeatures,
     TwoCameraFieldFeatures,
     VisionFieldFeatures,
+)
+from perception.providers.landmarks import (
+    HorizonFeatureProvider,
+    VisualOdometry,
+    VisualOdometryProviderConfig,
+    WalkOdometry,
 )
 from perception.providers.odometry import DeadReckoning
 from perception.providers.oracles import (
@@ -79,7 +89,9 @@ from perception.representations import (
     FIELD_FEATURE_LAST_SEEN,
     FIELD_FEATURES,
     FRAME_INPUTS,
+    HORIZON_FEATURES,
     IMAGE_DETECTIONS,
+    ODOMETRY,
     ODOMETRY_POSE,
     POLE_LAST_SEEN,
     POLE_SIGHTINGS,
@@ -107,7 +119,12 @@ ProviderFactory = Callable[["PipelineConfig", PerceptionContext], Provider]
 
 # representation -> provider name -> how to build it
 PROVIDERS: Mapping[str, Mapping[str, ProviderFactory]] = {
+    ODOMETRY: {
+        "reported": lambda c, ctx: WalkOdometry(),
+        "visual": lambda c, ctx: VisualOdometry(c.visual_odometry),
+    },
     ODOMETRY_POSE: {"dead_reckoning": lambda c, ctx: DeadReckoning()},
+    HORIZON_FEATURES: {"surf1d": lambda c, ctx: HorizonFeatureProvider(c.horizon, ctx)},
     IMAGE_DETECTIONS: {"cnn": lambda c, ctx: CnnDetections(c.cnn, ctx)},
     POLE_SIGHTINGS: {
         "cnn": lambda c, ctx: CnnPoleSightings(c.cnn, c.cnn_pole_score_threshold, ctx),
@@ -210,6 +227,14 @@ class PipelineConfig:
     # successive frames, which the filter takes as independent)
     pose_filter: PoseFilterConfig = field(
         default_factory=lambda: PoseFilterConfig(observation_weight=0.1)
+    )
+    # The odometry every pose estimator (and dead reckoning) uses: the robot's report
+    # (walk engine, wheel encoders), or its heading change replaced by the visual heading
+    # odometry of the horizon's 1D SURF features (seed 004 ch. 5; needs rendered images)
+    odometry: str = "reported"  # one of PROVIDERS["odometry"]
+    horizon: HorizonFeatureConfig = field(default_factory=HorizonFeatureConfig)
+    visual_odometry: VisualOdometryProviderConfig = field(
+        default_factory=VisualOdometryProviderConfig
     )
 
     def __post_init__(self) -> None:

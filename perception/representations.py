@@ -28,6 +28,10 @@ name                   value
                        centre circle, marks, posts and edges (robot frame)
 ``field_feature_last_seen``  ``Mapping[str, float]``: feature kind -> time (s) one was
                        last seen
+``horizon_features``   :class:`perception.landmarks.horizon_features.HorizonFeatures`:
+                       this frame's 1D SURF features on the horizon, with bearings
+``odometry``           :class:`perception.types.OdometryStep`: the motion since the last
+                       frame the pose estimators use (the walk's, or with the visual heading)
 =====================  ================================================================
 """
 
@@ -53,6 +57,8 @@ ROBOT_TRACKS = "robot_tracks"
 CIRCLE_MAP = "circle_map"
 FIELD_FEATURES = "field_features"
 FIELD_FEATURE_LAST_SEEN = "field_feature_last_seen"
+HORIZON_FEATURES = "horizon_features"
+ODOMETRY = "odometry"
 REPRESENTATIONS = (
     ODOMETRY_POSE,
     IMAGE_DETECTIONS,
@@ -65,6 +71,8 @@ REPRESENTATIONS = (
     CIRCLE_MAP,
     FIELD_FEATURES,
     FIELD_FEATURE_LAST_SEEN,
+    HORIZON_FEATURES,
+    ODOMETRY,
 )
 
 # the SensorFrame fields a provider may read (all but its time and the emulated representations)

@@ -270,6 +270,21 @@ class SensorFrame:
 
 
 @dataclass(frozen=True, kw_only=True)
+class OdometryStep:
+    """The motion since the last frame that the pose estimators use (robot frame of the last
+    frame): ``delta`` (3,) dx, dy (m), dθ (rad); ``walk_delta`` (3,) what the walk engine
+    reported. With visual odometry (seed 004 ch. 5) ``visual`` says dθ came from the horizon,
+    ``confidence`` is its frame pair's vote margin (0 otherwise) and ``collision`` is 1 / -1
+    while the body turns left / right of what the walk believes, else 0."""
+
+    delta: FloatArray
+    walk_delta: FloatArray
+    visual: bool = False
+    confidence: int = 0
+    collision: int = 0
+
+
+@dataclass(frozen=True, kw_only=True)
 class SlamEstimate:
     """The robot pose and landmark map believed by a SLAM back end (field frame).
 

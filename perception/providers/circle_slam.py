@@ -10,7 +10,7 @@ import numpy as np
 
 from perception.circles.scan_circles import ScanCirclesConfig, scan_arcs
 from perception.providers.base import Provider
-from perception.representations import CIRCLE_MAP, SELF_POSE, Prior
+from perception.representations import CIRCLE_MAP, ODOMETRY, SELF_POSE, Prior
 from perception.sensor_models import LaserModel
 from perception.slam.circle_slam import CircleSlam, CircleSlamConfig
 from perception.types import MappedCircle, SlamEstimate
@@ -27,7 +27,7 @@ class CircleSlamProvider(Provider):
     """
 
     provides = SELF_POSE
-    requires = ("odometry_delta", "laser", "laser_model")
+    requires = (ODOMETRY, "laser", "laser_model")
 
     def __init__(self, config: CircleSlamConfig, scan: ScanCirclesConfig) -> None:
         self.config = config
@@ -48,7 +48,7 @@ class CircleSlamProvider(Provider):
 
     def update(self, inputs: Mapping[str, Any], time_s: float) -> SlamEstimate:
         slam = self.slam
-        slam.predict(inputs["odometry_delta"])
+        slam.predict(inputs[ODOMETRY].delta)
         model: LaserModel = inputs["laser_model"]
         arcs = scan_arcs(model.beam_angles(), inputs["laser"], model.mount_x_m, self.scan)
         slam.update_scan(arcs, model.mount_x_m, model.range_noise_std_m)

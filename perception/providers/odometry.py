@@ -9,14 +9,14 @@ import numpy as np
 
 from perception.geometry import FloatArray, compose
 from perception.providers.base import Provider
-from perception.representations import ODOMETRY_POSE, Prior
+from perception.representations import ODOMETRY, ODOMETRY_POSE, Prior
 
 
 class DeadReckoning(Provider):
     """Composes each frame's odometry increment (3,) onto the prior pose (field frame)."""
 
     provides = ODOMETRY_POSE
-    requires = ("odometry_delta",)
+    requires = (ODOMETRY,)
 
     def __init__(self) -> None:
         self._pose = np.zeros(3)
@@ -25,5 +25,5 @@ class DeadReckoning(Provider):
         self._pose = np.asarray(prior.pose, dtype=np.float64).copy()
 
     def update(self, inputs: Mapping[str, Any], time_s: float) -> FloatArray:
-        self._pose = compose(self._pose, inputs["odometry_delta"])
+        self._pose = compose(self._pose, inputs[ODOMETRY].delta)
         return self._pose.copy()

@@ -6,7 +6,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from perception.providers.base import Provider
-from perception.representations import POLE_SIGHTINGS, SELF_POSE, Prior
+from perception.representations import ODOMETRY, POLE_SIGHTINGS, SELF_POSE, Prior
 from perception.slam import EkfSlam, EkfSlamConfig
 from perception.types import SlamEstimate
 
@@ -19,7 +19,7 @@ class EkfSlamProvider(Provider):
     """
 
     provides = SELF_POSE
-    requires = ("odometry_delta", POLE_SIGHTINGS)
+    requires = (ODOMETRY, POLE_SIGHTINGS)
 
     def __init__(self, config: EkfSlamConfig) -> None:
         self.config = config
@@ -37,6 +37,6 @@ class EkfSlamProvider(Provider):
 
     def update(self, inputs: Mapping[str, Any], time_s: float) -> SlamEstimate:
         slam = self.slam
-        slam.predict(inputs["odometry_delta"])
+        slam.predict(inputs[ODOMETRY].delta)
         slam.update(inputs[POLE_SIGHTINGS])
         return slam.estimate()

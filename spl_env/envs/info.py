@@ -18,12 +18,19 @@ from perception.field.features import FEATURE_KINDS, FieldFeature
 from perception.representations import (
     CIRCLE_MAP,
     FIELD_FEATURES,
+    ODOMETRY,
     ODOMETRY_POSE,
     POLE_SIGHTINGS,
     ROBOT_TRACKS,
     SELF_POSE,
 )
-from perception.types import LandmarkObservation, MappedCircle, RobotTrack, SlamEstimate
+from perception.types import (
+    LandmarkObservation,
+    MappedCircle,
+    OdometryStep,
+    RobotTrack,
+    SlamEstimate,
+)
 from spl_env.world_state import WorldState
 
 
@@ -152,7 +159,22 @@ def field_features_info(features: tuple[FieldFeature, ...], layout: InfoLayout) 
     return info
 
 
+def odometry_info(step: OdometryStep, layout: InfoLayout) -> dict[str, Any]:
+    """The odometry the pose estimators used this step (``odometry_delta`` (3,), robot frame),
+    the walk's report (``walk_odometry_delta`` (3,)), whether its heading change was visual
+    (``visual_heading``), that frame pair's vote margin (``visual_heading_confidence``) and the
+    collision flag (``collision``: 1 / -1 turning left / right of the walk, else 0)."""
+    return {
+        "odometry_delta": np.asarray(step.delta, dtype=np.float64).copy(),
+        "walk_odometry_delta": np.asarray(step.walk_delta, dtype=np.float64).copy(),
+        "visual_heading": np.bool_(step.visual),
+        "visual_heading_confidence": np.int64(step.confidence),
+        "collision": np.int64(step.collision),
+    }
+
+
 PERCEPTION_INFO: Mapping[str, Callable[[Any, InfoLayout], dict[str, Any]]] = {
+    ODOMETRY: odometry_info,
     SELF_POSE: self_pose_info,
     POLE_SIGHTINGS: pole_sightings_info,
     ODOMETRY_POSE: lambda pose, layout: {"odometry_pose": np.asarray(pose).copy()},

@@ -16,10 +16,10 @@ from perception.geometry import FloatArray
 from perception.pipeline import PerceptionPipeline, PipelineConfig
 from perception.providers.base import PerceptionContext
 from perception.providers.circle_slam import CircleSlamProvider, SlamCircleMap
-from perception.representations import CIRCLE_MAP, SELF_POSE, Prior
+from perception.representations import CIRCLE_MAP, ODOMETRY, SELF_POSE, Prior
 from perception.sensor_models import LaserModel
 from perception.slam.circle_slam import CircleSlamConfig
-from perception.types import MappedCircle, PoleGeometry, SensorFrame, SlamEstimate
+from perception.types import MappedCircle, OdometryStep, PoleGeometry, SensorFrame, SlamEstimate
 
 LASER = LaserModel(mount_x_m=0.018)  # seed 001's laser, on the Pioneer's mount
 COLUMNS = np.array([[2.0, 1.6, 0.35], [2.6, -0.9, 0.3]])  # (x, y, R) (m, world)
@@ -68,7 +68,8 @@ def frames(
 
 
 def inputs(increment: FloatArray, scan: FloatArray) -> dict[str, object]:
-    return {"odometry_delta": increment, "laser": scan, "laser_model": LASER}
+    odometry = OdometryStep(delta=increment, walk_delta=increment)
+    return {ODOMETRY: odometry, "laser": scan, "laser_model": LASER}
 
 
 def provider(min_views: int = 3) -> CircleSlamProvider:
@@ -87,7 +88,7 @@ def by_truth(circles: tuple[MappedCircle, ...]) -> list[MappedCircle]:
 
 def test_the_provider_names_what_it_reads_and_provides() -> None:
     assert CircleSlamProvider.provides == SELF_POSE == "self_pose"
-    assert set(CircleSlamProvider.requires) == {"odometry_delta", "laser", "laser_model"}
+    assert set(CircleSlamProvider.requires) == {ODOMETRY, "laser", "laser_model"}
     assert SlamCircleMap.provides == CIRCLE_MAP == "circle_map"
     assert SlamCircleMap.requires == (SELF_POSE,)
 
@@ -191,7 +192,7 @@ def test_the_pipeline_maps_the_columns_with_circle_slam() -> None:
     pipeline = PerceptionPipeline(
         config, PerceptionContext(None, (), PoleGeometry()), outputs=["circle_map"]
     )
-    assert pipeline.representations == (SELF_POSE, CIRCLE_MAP)
+    assert pipeline.representations == (ODOMETRY, SELF_POSE, CIRCLE_MAP)
     assert pipeline.frame_inputs == {"odometry_delta", "laser", "laser_model"}
     pipeline.reset(START.copy(), np.random.default_rng(0))
     for k, increment, scan in frames():

@@ -16,12 +16,14 @@ import pytest
 
 from perception.pipeline import PROVIDERS, PerceptionPipeline, PipelineConfig
 from perception.providers.base import PerceptionContext
+from perception.providers.landmarks import WalkOdometry
 from perception.providers.odometry import DeadReckoning
 from perception.providers.poles import ColourPoleSightings, PoleSightingHistory
 from perception.providers.slam import EkfSlamProvider
 from perception.representations import (
     CIRCLE_MAP,
     IMAGE_DETECTIONS,
+    ODOMETRY,
     ODOMETRY_POSE,
     POLE_LAST_SEEN,
     POLE_SIGHTINGS,
@@ -73,10 +75,11 @@ def blank_image() -> np.ndarray:
 
 
 # ----- which providers are built -------------------------------------------------------------
-def test_odometry_pose_alone_builds_one_provider_reading_only_odometry() -> None:
+def test_odometry_pose_alone_builds_the_providers_reading_only_odometry() -> None:
     pipeline = PerceptionPipeline(PipelineConfig(), context(), outputs=[ODOMETRY_POSE])
-    assert pipeline.representations == (ODOMETRY_POSE,)
+    assert pipeline.representations == (ODOMETRY, ODOMETRY_POSE)
     assert pipeline.frame_inputs == frozenset({"odometry_delta"})
+    assert isinstance(pipeline.provider(ODOMETRY), WalkOdometry)
     assert isinstance(pipeline.provider(ODOMETRY_POSE), DeadReckoning)
     for absent in (POLE_SIGHTINGS, SELF_POSE, IMAGE_DETECTIONS, POLE_LAST_SEEN):
         with pytest.raises(KeyError):
@@ -84,13 +87,13 @@ def test_odometry_pose_alone_builds_one_provider_reading_only_odometry() -> None
     # a frame with nothing but odometry is enough (no camera, no image)
     pipeline.reset(np.zeros(3), np.random.default_rng(0))
     out = pipeline.step(SensorFrame(time_s=0.1, odometry_delta=np.array([0.1, 0.0, 0.0])))
-    assert set(out) == {ODOMETRY_POSE}
+    assert set(out) == {ODOMETRY, ODOMETRY_POSE}
 
 
 def test_self_pose_with_colour_sightings_in_dependency_order() -> None:
     cfg = PipelineConfig(pole_sightings="colour")
     pipeline = PerceptionPipeline(cfg, context(), outputs=[SELF_POSE])
-    assert pipeline.representations == (POLE_SIGHTINGS, SELF_POSE)
+    assert pipeline.representations == (ODOMETRY, POLE_SIGHTINGS, SELF_POSE)
     assert pipeline.frame_inputs == frozenset({"odometry_delta", "image", "camera_state"})
     assert isinstance(pipeline.provider(POLE_SIGHTINGS), ColourPoleSightings)
     assert isinstance(pipeline.provider(SELF_POSE), EkfSlamProvider)
@@ -102,7 +105,9 @@ def test_requested_outputs_share_providers() -> None:
         cfg, context(), outputs=[POLE_LAST_SEEN, SELF_POSE, ODOMETRY_POSE, POLE_SIGHTINGS]
     )
     order = pipeline.representations
-    assert sorted(order) == sorted([POLE_SIGHTINGS, POLE_LAST_SEEN, SELF_POSE, ODOMETRY_POSE])
+    assert sorted(order) == sorted(
+        [ODOMETRY, POLE_SIGHTINGS, POLE_LAST_SEEN, SELF_POSE, ODOMETRY_POSE]
+    )
     assert order.index(POLE_SIGHTINGS) < order.index(POLE_LAST_SEEN)
     assert order.index(POLE_SIGHTINGS) < order.index(SELF_POSE)
     assert IMAGE_DETECTIONS not in order  # the colour filter needs no CNN detections

@@ -1,0 +1,108 @@
+"""Natural landmarks and the odometry the pose estimators use, as providers.
+
+``horizon_features``: :class:`HorizonFeatureProvider`, the frame's 1D SURF features on the
+horizon (:mod:`perception.landmarks.horizon_features`). ``odometry``: :class:`WalkOdometry`
+(the walk engine's report, as it is) or :class:`VisualOdometry` (its heading change replaced
+by the visual heading odometry of seed 004 ch. 5 when the horizon's votes are confident,
+features on detected robots discarded, with the collision flag).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from perception.landmarks.horizon_features import (
+    HorizonFeatureConfig,
+    HorizonFeatures,
+    horizon_features,
+)
+from perception.landmarks.matching import MatchingConfig
+from perception.landmarks.visual_odometry import (
+    CollisionDetector,
+    VisualHeadingOdometry,
+    VisualOdometryConfig,
+    nearest_neighbours,
+)
+from perception.providers.base import PerceptionContext, Provider
+from perception.representations import HORIZON_FEATURES, ODOMETRY, ROBOT_SIGHTINGS, Prior
+from perception.types import CameraModel, OdometryStep, RobotSighting
+
+
+class HorizonFeatureProvider(Provider):
+    """The 1D SURF features on the horizon of the frame's image."""
+
+    provides = HORIZON_FEATURES
+    requires = ("image", "camera_state")
+
+    def __init__(self, config: HorizonFeatureConfig, context: PerceptionContext) -> None:
+        self.config = config
+        self.camera: CameraModel = context.require_camera("the horizon features")
+
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> HorizonFeatures:
+        return horizon_features(inputs["image"], self.camera, inputs["camera_state"], self.config)
+
+
+class WalkOdometry(Provider):
+    """The walk engine's odometry, as it reports it."""
+
+    provides = ODOMETRY
+    requires = ("odometry_delta",)
+
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> OdometryStep:
+        delta = np.asarray(inputs["odometry_delta"], dtype=np.float64)
+        return OdometryStep(delta=delta, walk_delta=delta)
+
+
+@dataclass(frozen=True, kw_only=True)
+class VisualOdometryProviderConfig:
+    """The visual heading odometry and its frame-to-frame matching."""
+
+    odometry: VisualOdometryConfig = field(default_factory=VisualOdometryConfig)
+    matching: MatchingConfig = field(default_factory=MatchingConfig)
+
+
+class VisualOdometry(Provider):
+    """The walk's translation with the heading change of the horizon features (seed 004
+    ch. 5), the walk's heading change where their votes are not confident. Features on
+    detected robots are discarded first (seed 004 §5.2)."""
+
+    provides = ODOMETRY
+    requires = ("odometry_delta", HORIZON_FEATURES, ROBOT_SIGHTINGS)
+
+    def __init__(self, config: VisualOdometryProviderConfig) -> None:
+        self.config = config
+        self.heading = VisualHeadingOdometry(config.odometry, nearest_neighbours(config.matching))
+        self.collisions = CollisionDetector(config.odometry)
+
+    def reset(self, prior: Prior) -> None:
+        self.heading.reset()
+        self.collisions.reset()
+
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> OdometryStep:
+        walk = np.asarray(inputs["odometry_delta"], dtype=np.float64)
+        features: HorizonFeatures = inputs[HORIZON_FEATURES]
+        features = features.without(_on_robots(features, inputs[ROBOT_SIGHTINGS]))
+        step = self.heading.update(features, float(walk[2]))
+        collision = self.collisions.update(step.delta_rad, float(walk[2]))
+        return OdometryStep(
+            delta=np.array([walk[0], walk[1], step.delta_rad]),
+            walk_delta=walk,
+            visual=step.visual,
+            confidence=step.confidence,
+            collision=collision,
+        )
+
+
+def _on_robots(features: HorizonFeatures, sightings: Sequence[RobotSighting]) -> np.ndarray:
+    """(N,) bool: the features whose column lies in a sighted robot's image box."""
+    x = features.features.x
+    drop = np.zeros(len(x), dtype=bool)
+    for sighting in sightings:
+        u0, _, u1, _ = sighting.box
+        if np.isfinite(u0) and np.isfinite(u1):
+            drop |= (x >= u0) & (x <= u1)
+    return drop
