@@ -389,6 +389,8 @@ class SplEnv(RobotEnv[WorldState]):
         ball = self.task.place_scripted(rng, others, [ours])
         self.scene.place_ball(ball)
         self.rig.reset(rng)
+        if self.scene.spectators.names:  # drawn last: without spectators no draw moves
+            self.scene.spectators.reset(rng)
         return prior
 
     def _act(self, action: FloatArray, state: WorldState) -> None:
@@ -398,6 +400,7 @@ class SplEnv(RobotEnv[WorldState]):
         ours = self.robots[AGENT]
         yaw_before = ours.pose[2] + ours.head[0]
         self._engine_delta = self._move(commands)
+        self.scene.spectators.move(self.config.control_dt_s)
         yaw_rate = float(wrap_angle(ours.pose[2] + ours.head[0] - yaw_before))
         self.camera_yaw_rate_rps = yaw_rate / self.config.control_dt_s
 

@@ -19,6 +19,7 @@ from perception.geometry import FloatArray
 from perception.types import PoleCode, PoleGeometry
 from perception.validation import check_in_interval, check_int, check_positive
 from spl_env.field import FieldDimensions, PoleLayout
+from spl_env.scenes.spectators import Spectators
 from spl_env.sim.world import MAX_PARTS_PER_BODY, BulletWorld, VisualPart
 
 CARPET_RGBA = (0.16, 0.48, 0.18, 1.0)
@@ -51,6 +52,9 @@ class SceneConfig:
     ball_mass_kg: float = 0.044  # SPL ball mass
     ball_rolling_friction: float = 0.0015
     scene_seed: int = 0  # picks the posters when the world is built
+    # People walking between the carpet and the boards (spl_env.scenes.spectators); 0: none
+    spectators: int = 0
+    spectator_speed_mps: float = 1.0
 
     def __post_init__(self) -> None:
         owner = "SceneConfig"
@@ -60,6 +64,8 @@ class SceneConfig:
             owner, "ball_rolling_friction", self.ball_rolling_friction, 0.0, 1.0, low_inclusive=True
         )
         check_int(owner, "scene_seed", self.scene_seed, 0)
+        check_int(owner, "spectators", self.spectators, 0)
+        check_positive(owner, "spectator_speed_mps", self.spectator_speed_mps, upper=3.0)
         carpet_l = self.dimensions.carpet_size_m[0]
         r = self.poles.geometry.radius_m
         if self.poles.offset_outside_m + r > self.dimensions.border_strip_m:
@@ -272,7 +278,9 @@ class SplFieldScene:
     seeded stream draws the posters and then every frame). ``codes`` (L,) are the poles' colour
     codes, ``landmark_ids`` (L,) and ``landmarks`` (L, 2) their ids and field positions (m);
     ``obstacles`` (K, 3) the goal posts and poles as ``(x, y, radius)`` circles (m) that robots
-    walk around; ``bodies`` names the bodies.
+    walk around; ``bodies`` names the bodies; ``spectators`` the people walking outside the
+    carpet (``config.spectators`` of them; their shirts drawn from ``poster_rng`` after the
+    posters).
     """
 
     def __init__(
@@ -286,6 +294,14 @@ class SplFieldScene:
         if poster_rng is None:
             poster_rng = np.random.default_rng(config.scene_seed)
         self.bodies = build_scene(world, config, poster_rng)
+        self.spectators = Spectators(
+            world,
+            config.spectators,
+            config.dimensions.carpet_size_m,
+            lane_m=config.board_distance_m / 2,
+            speed_mps=config.spectator_speed_mps,
+            rng=poster_rng,
+        )
         self.codes: tuple[PoleCode, ...] = config.poles.codes() if config.poles_enabled else ()
         positions = config.poles.positions(config.dimensions)
         self.landmark_ids = np.array([c.landmark_id for c in self.codes], dtype=np.int64)
