@@ -33,11 +33,12 @@ threshold, and the non-matches by kind: *overlap* (headings 20 deg to the camera
 view apart: the views still share part of the horizon), *look-alike* (no overlap but a poster
 in both views: the boards carry 12 poster textures on 20 panels, so posters repeat) and
 *distinct*, with each kind's false-positive rate at that threshold and the kinds of the 20
-highest-scoring non-matches. The posters on the panels are found by drawing ``integers(12)``
-once per panel from a generator seeded like the scene's poster draw (``build_scene`` draws
-exactly that), the posters in view from the renderer's body labels on the horizon row. Per
-poster texture: its contrast along and across the rows and the 1D SURF features of the views
-that show it.
+highest-scoring non-matches. The posters on the panels are the scene's record
+(:attr:`spl_env.scenes.spl_field.SceneBodies.posters`), the posters in view from the
+renderer's body labels on the horizon row. Per poster texture: its contrast along and across
+the rows and the 1D SURF features of the views that show it. ``--posters`` picks the poster
+set (``classic``, the default scenes', or ``textured``, built with upright structure for the
+horizon; :mod:`spl_env.assets.make_posters`).
 
 Costs (one thread, ``cv2.setNumThreads(1)``): extraction ms per image, the mean over
 ``--repeats`` timed passes over all images after one warm-up pass (also the median, and the
@@ -51,10 +52,12 @@ Scenes (``--seed`` S): posters drawn with scene seed S; a second draw (S + 1); S
 landmark poles; S with one episode of randomised lighting
 (:meth:`spl_env.sensors.camera.EpisodeLighting.sample` with generator S: fixed over the turn);
 and a control without boards (only the goals, the field and the white background on the
-horizon). Writes ``horizon_matching.json`` and ``horizon_matching.md`` under ``--out``;
-the default run takes 80-130 s on 2 shared CPU cores (under a load of 4-5)::
+horizon). Writes ``horizon_matching.json`` and ``horizon_matching.md`` under ``--out``
+(``horizon_matching_textured.*`` with ``--posters textured``); the default run takes 80-130 s
+on 2 shared CPU cores (under a load of 4-5)::
 
     python benchmarks/horizon_matching.py
+    python benchmarks/horizon_matching.py --posters textured
     python benchmarks/horizon_matching.py --seed 3 --out /tmp/horizon_matching
 """
 
@@ -91,7 +94,7 @@ from perception.landmarks.matching import (
 from perception.landmarks.surf1d import extract_features
 from perception.types import CameraModel, CameraState
 from spl_env.robots.nao import NaoRobot, RobotConfig
-from spl_env.scenes.spl_field import POSTER_FILES, SceneConfig, SplFieldScene
+from spl_env.scenes.spl_field import POSTER_SETS, SceneConfig, SplFieldScene
 from spl_env.sensors.camera import Camera, CameraConfig, EpisodeLighting, LightingRandomisation
 from spl_env.sim.world import BulletWorld
 
@@ -144,7 +147,7 @@ class Turn:
             if variant.random_lighting
             else EpisodeLighting.default()
         )
-        self.posters = panel_posters(self.world, variant.scene)
+        self.posters = panel_posters(self.world, self.scene)
 
     def capture(self, heading_deg: float, rng: np.random.Generator) -> Frame:
         """The frame at ``heading_deg`` (robot at the centre spot, head level, standing)."""
@@ -157,21 +160,10 @@ class Turn:
         self.world.close()
 
 
-def panel_posters(world: BulletWorld, config: SceneConfig) -> dict[int, int]:
-    """Body id -> poster index of every board panel: ``build_scene`` draws one
-    ``integers(len(POSTER_FILES))`` per panel, in panel order, from the scene's generator."""
-    if not config.boards_enabled:
-        return {}
-    twin = np.random.default_rng(config.scene_seed)
-    posters: dict[int, int] = {}
-    panel = 0
-    while True:
-        try:
-            body = world.body(f"board_{panel}")
-        except KeyError:
-            return posters
-        posters[body] = int(twin.integers(len(POSTER_FILES)))
-        panel += 1
+def panel_posters(world: BulletWorld, scene: SplFieldScene) -> dict[int, int]:
+    """Body id -> index in the scene's poster set of every board panel's poster."""
+    files = POSTER_SETS[scene.config.poster_set]
+    return {world.body(name): files.index(file) for name, file in scene.bodies.posters.items()}
 
 
 def posters_in_view(
@@ -440,20 +432,21 @@ def run_variant(variant: Variant, args: argparse.Namespace) -> dict[str, Any]:
     }
 
 
-def poster_texture(scenes: dict[str, Any]) -> list[dict[str, Any]]:
+def poster_texture(scenes: dict[str, Any], poster_set: str) -> list[dict[str, Any]]:
     """Per poster texture: mean absolute grey difference between neighbouring texels along
     the rows (``column_contrast``: structure 1D SURF can see on a level horizon) and down the
     columns (``row_contrast``), and the mean 1D SURF features per image over the headings of
     the board scenes whose horizon shows the poster."""
     folder = resources.files("spl_env") / "assets" / "posters"
-    seen: dict[int, list[int]] = {k: [] for k in range(len(POSTER_FILES))}
+    files = POSTER_SETS[poster_set]
+    seen: dict[int, list[int]] = {k: [] for k in range(len(files))}
     for result in scenes.values():
         in_view = result["posters_in_view_per_heading"]
         for count, posters in zip(result["features_per_heading_1d_surf"], in_view, strict=True):
             for poster in posters:
                 seen[poster].append(count)
     table = []
-    for k, name in enumerate(POSTER_FILES):
+    for k, name in enumerate(files):
         with resources.as_file(folder / name) as path:
             grey = np.asarray(cv2.imread(str(path), cv2.IMREAD_GRAYSCALE), dtype=np.float64)
         table.append(
@@ -484,15 +477,24 @@ def machine() -> str:
     return f"{name}, {os.cpu_count()} CPUs, opencv {cv2.__version__}"
 
 
-def variants(seed: int) -> list[Variant]:
+def variants(seed: int, poster_set: str) -> list[Variant]:
     """The scenes of the run (module docstring)."""
-    plain = SceneConfig(poles_enabled=False, scene_seed=seed)
+
+    def scene(scene_seed: int, poles: bool = False, boards: bool = True) -> SceneConfig:
+        return SceneConfig(
+            scene_seed=scene_seed,
+            poster_set=poster_set,
+            poles_enabled=poles,
+            boards_enabled=boards,
+        )
+
+    plain = scene(seed)
     return [
         Variant(f"posters seed {seed}", plain),
-        Variant(f"posters seed {seed + 1}", SceneConfig(poles_enabled=False, scene_seed=seed + 1)),
-        Variant(f"posters seed {seed}, poles", SceneConfig(poles_enabled=True, scene_seed=seed)),
+        Variant(f"posters seed {seed + 1}", scene(seed + 1)),
+        Variant(f"posters seed {seed}, poles", scene(seed, poles=True)),
         Variant(f"posters seed {seed}, random lighting", plain, random_lighting=True),
-        Variant("no boards (control)", SceneConfig(poles_enabled=False, boards_enabled=False)),
+        Variant("no boards (control)", scene(0, boards=False)),
     ]
 
 
@@ -501,7 +503,8 @@ def markdown(report: dict[str, Any]) -> str:
     lines = [
         "# 1D SURF natural landmark recognition on a turn in place (seed 004 Table 2, Fig. 13)",
         "",
-        f"Ours: {report['images']} images {report['step_deg']} deg apart at the field centre, "
+        f"Ours: {report['poster_set']} posters; {report['images']} images "
+        f"{report['step_deg']} deg apart at the field centre, "
         f"head level; match: headings < {report['match_deg']} deg apart (round the circle). "
         f"{report['pairs']['match']} matched and {report['pairs']['nonmatch']} unmatched pairs "
         "(seed: 480 and 2,065). Score: sum of inverse descriptor distances of the 0.7-ratio "
@@ -598,11 +601,12 @@ def main() -> None:
     parser.add_argument("--step-deg", type=float, default=4.0)
     parser.add_argument("--match-deg", type=float, default=20.0)
     parser.add_argument("--repeats", type=int, default=5, help="timed extraction passes")
+    parser.add_argument("--posters", default="classic", choices=tuple(POSTER_SETS))
     args = parser.parse_args()
     cv2.setNumThreads(1)
     started = time.perf_counter()
     scenes: dict[str, Any] = {}
-    for variant in variants(args.seed):
+    for variant in variants(args.seed, args.posters):
         scenes[variant.name] = run_variant(variant, args)
         summary = {m: r["auc"] for m, r in scenes[variant.name]["methods"].items()}
         print(variant.name, summary, f"{scenes[variant.name]['seconds']} s", flush=True)
@@ -617,12 +621,14 @@ def main() -> None:
         "seed_table_2": SEED_TABLE,
         "machine": machine(),
         "scenes": scenes,
-        "posters": poster_texture(scenes),
+        "poster_set": args.posters,
+        "posters": poster_texture(scenes, args.posters),
         "seconds": round(time.perf_counter() - started, 1),
     }
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "horizon_matching.json").write_text(json.dumps(report, indent=1))
-    (args.out / "horizon_matching.md").write_text(markdown(report))
+    stem = "horizon_matching" + ("" if args.posters == "classic" else f"_{args.posters}")
+    (args.out / f"{stem}.json").write_text(json.dumps(report, indent=1))
+    (args.out / f"{stem}.md").write_text(markdown(report))
     print(markdown(report))
 
 

@@ -13,6 +13,10 @@ the best confidence is below ``min_confidence`` the heading change is the walk e
 that frame starts a new chain (infinite reliability, as eq. 12's first frame): its heading is
 the walk's, not a visual link's, and without the restart one unmatched frame would pin every
 later reliability at its confidence (eq. 11 never rises) and the visual heading would stop.
+A frame pair whose visual heading change lies further than ``max_disagreement_rad`` from the
+walk's is not a candidate (not in the seed): a confident wrong mode (a poster repeated along
+the boards) turns the heading by tens of degrees in one frame, which no walk, slip or push
+does.
 
 Collisions: an exponential moving average of the visual minus the walk heading change per
 frame against symmetric bounds; beyond the upper bound the body is turning left of what the
@@ -62,8 +66,9 @@ class VisualOdometryConfig:
     horizon sample's angle); votes within ``mode_halfwidth_bins`` bins of the first mode
     count for it and its heading is their mean; the second mode is the fullest bin outside
     ``2 * mode_halfwidth_bins + 1`` bins of the first. ``min_confidence`` (votes) is the least
-    confidence for which the visual heading is used; ``history`` previous frames are tried
-    (the seed's 3). ``collision_smoothing`` is the moving average's weight of a new frame,
+    confidence for which the visual heading is used, ``max_disagreement_rad`` the most it may
+    differ from the walk's in a frame; ``history`` previous frames are tried (the seed's 3).
+    ``collision_smoothing`` is the moving average's weight of a new frame,
     ``collision_bound_rad`` its bound (rad per frame).
     """
 
@@ -73,6 +78,7 @@ class VisualOdometryConfig:
     history: int = 3
     collision_smoothing: float = 0.2
     collision_bound_rad: float = math.radians(1.0)
+    max_disagreement_rad: float = math.radians(10.0)
 
     def __post_init__(self) -> None:
         owner = "VisualOdometryConfig"
@@ -84,6 +90,7 @@ class VisualOdometryConfig:
             owner, "collision_smoothing", self.collision_smoothing, upper=1.0, upper_inclusive=True
         )
         check_positive(owner, "collision_bound_rad", self.collision_bound_rad)
+        check_positive(owner, "max_disagreement_rad", self.max_disagreement_rad)
 
 
 @dataclass(frozen=True)
@@ -165,25 +172,28 @@ class VisualHeadingOdometry:
         if not self._frames:
             self._frames.append(_Frame(features, 0.0, math.inf))
             return HeadingStep(0.0, False, 0, 0, math.inf)
-        best: tuple[float, int, float, int] | None = None  # score, age, turn, confidence
+        last = self._frames[-1]
+        best: tuple[float, int, float, int] | None = None  # score, age, delta, confidence
+        most_votes = 0  # the best confidence of any frame pair, for the report
         for age, frame in enumerate(reversed(self._frames), start=1):
             pairs = self.match(frame.features, features)
             shifts = frame.features.bearings[pairs[:, 0]] - features.bearings[pairs[:, 1]]
             modes = shift_modes(shifts, self.config)
+            most_votes = max(most_votes, modes.confidence)
+            head_turn = features.head_yaw - frame.features.head_yaw
+            delta = float(wrap_angle(frame.heading + modes.turn - head_turn - last.heading))
+            usable = modes.confidence >= self.config.min_confidence and math.isfinite(delta)
+            if not usable or abs(delta - walk_delta_rad) > self.config.max_disagreement_rad:
+                continue
             score = min(frame.reliability, float(modes.confidence))
             if best is None or score >= best[0]:  # ties: the oldest frame
-                best = (score, age, modes.turn, modes.confidence)
-        assert best is not None
-        score, age, turn, confidence = best
-        last = self._frames[-1]
-        if confidence < self.config.min_confidence or not math.isfinite(turn):
+                best = (score, age, delta, modes.confidence)
+        if best is None:
             self._frames.append(_Frame(features, last.heading + walk_delta_rad, math.inf))
-            return HeadingStep(walk_delta_rad, False, 0, confidence, math.inf)
-        reference = self._frames[-age]
-        head_turn = features.head_yaw - reference.features.head_yaw
-        heading = reference.heading + turn - head_turn
-        self._frames.append(_Frame(features, heading, score))
-        return HeadingStep(float(wrap_angle(heading - last.heading)), True, age, confidence, score)
+            return HeadingStep(walk_delta_rad, False, 0, most_votes, math.inf)
+        score, age, delta, confidence = best
+        self._frames.append(_Frame(features, last.heading + delta, score))
+        return HeadingStep(delta, True, age, confidence, score)
 
 
 class CollisionDetector:

@@ -84,8 +84,7 @@ class VisualOdometry(Provider):
 
     def update(self, inputs: Mapping[str, Any], time_s: float) -> OdometryStep:
         walk = np.asarray(inputs["odometry_delta"], dtype=np.float64)
-        features: HorizonFeatures = inputs[HORIZON_FEATURES]
-        features = features.without(_on_robots(features, inputs[ROBOT_SIGHTINGS]))
+        features = features_off_robots(inputs[HORIZON_FEATURES], inputs[ROBOT_SIGHTINGS])
         step = self.heading.update(features, float(walk[2]))
         collision = self.collisions.update(step.delta_rad, float(walk[2]))
         return OdometryStep(
@@ -97,12 +96,15 @@ class VisualOdometry(Provider):
         )
 
 
-def _on_robots(features: HorizonFeatures, sightings: Sequence[RobotSighting]) -> np.ndarray:
-    """(N,) bool: the features whose column lies in a sighted robot's image box."""
+def features_off_robots(
+    features: HorizonFeatures, sightings: Sequence[RobotSighting]
+) -> HorizonFeatures:
+    """``features`` less those whose column lies in a sighted robot's image box (seed 004
+    discards them in visual odometry and natural landmark recognition alike)."""
     x = features.features.x
-    drop = np.zeros(len(x), dtype=bool)
+    on_robots = np.zeros(len(x), dtype=bool)
     for sighting in sightings:
         u0, _, u1, _ = sighting.box
         if np.isfinite(u0) and np.isfinite(u1):
-            drop |= (x >= u0) & (x <= u1)
-    return drop
+            on_robots |= (x >= u0) & (x <= u1)
+    return features.without(on_robots)

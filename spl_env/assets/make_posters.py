@@ -1,8 +1,14 @@
 """Regenerate the poster textures shipped in ``spl_env/assets/posters``.
 
-Run ``python -m spl_env.assets.make_posters``. Each poster is a 64 x 64 PNG of procedural clutter
-(stripes, blocks, discs and bars of text-like marks on a tinted ground), drawn from a fixed seed
-so the shipped files are reproducible byte for byte.
+Run ``python -m spl_env.assets.make_posters``. Two sets, each drawn from a fixed seed so the
+shipped files are reproducible byte for byte:
+
+- ``poster_NN.png`` (the ``"classic"`` set): 64 x 64 procedural clutter (stripes, blocks, discs
+  and bars of text-like marks on a tinted ground). Mostly horizontal structure: a level camera's
+  horizon row crosses few edges on some of them.
+- ``textured_NN.png`` (the ``"textured"`` set): 128 x 128 clutter built to be seen along a row:
+  upright bars, blocks and columns of marks of many widths and contrasts, the scale-rich texture
+  natural landmarks on the horizon need (seed 004 ch. 3-5; an office or a hall has it).
 """
 
 from __future__ import annotations
@@ -14,6 +20,7 @@ import cv2
 import numpy as np
 
 SIZE_PX = 64
+TEXTURED_SIZE_PX = 128
 N_POSTERS = 12
 
 
@@ -43,6 +50,32 @@ def draw_poster(rng: np.random.Generator) -> np.ndarray:
     return img
 
 
+def draw_textured_poster(rng: np.random.Generator) -> np.ndarray:
+    """One (128, 128, 3) uint8 BGR poster with upright structure at every scale."""
+    n = TEXTURED_SIZE_PX
+    img = np.empty((n, n, 3), np.uint8)
+    img[:] = rng.integers(40, 230, size=3)
+    x = 0
+    while x < n:  # upright bars of varied widths and contrasts across the whole poster
+        width = int(rng.integers(2, 24))
+        if rng.random() < 0.6:
+            colour = tuple(int(c) for c in rng.integers(0, 256, size=3))
+            top, bottom = sorted(int(v) for v in rng.integers(0, n, size=2))
+            cv2.rectangle(
+                img, (x, min(top, n // 4)), (x + width, max(bottom, 3 * n // 4)), colour, -1
+            )
+        x += width + int(rng.integers(0, 10))
+    for _ in range(int(rng.integers(4, 10))):  # blocks and discs over them
+        colour = tuple(int(c) for c in rng.integers(0, 256, size=3))
+        a = rng.integers(0, n, size=2)
+        if rng.random() < 0.5:
+            b = a + rng.integers(4, 40, size=2)
+            cv2.rectangle(img, (int(a[0]), int(a[1])), (int(b[0]), int(b[1])), colour, -1)
+        else:
+            cv2.circle(img, (int(a[0]), int(a[1])), int(rng.integers(3, 18)), colour, -1)
+    return img
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--out", type=Path, default=Path(__file__).parent / "posters")
@@ -52,7 +85,9 @@ def main() -> None:
     rng = np.random.default_rng(args.seed)
     for i in range(N_POSTERS):
         cv2.imwrite(str(args.out / f"poster_{i:02d}.png"), draw_poster(rng))
-    print(f"wrote {N_POSTERS} posters to {args.out}")
+    for i in range(N_POSTERS):  # after the classic set: its draws stay as they were
+        cv2.imwrite(str(args.out / f"textured_{i:02d}.png"), draw_textured_poster(rng))
+    print(f"wrote {2 * N_POSTERS} posters to {args.out}")
 
 
 if __name__ == "__main__":

@@ -17,7 +17,7 @@ import numpy as np
 
 from perception.geometry import FloatArray
 from perception.types import PoleCode, PoleGeometry
-from perception.validation import check_in_interval, check_int, check_positive
+from perception.validation import check_choice, check_in_interval, check_int, check_positive
 from spl_env.field import FieldDimensions, PoleLayout
 from spl_env.scenes.spectators import Spectators
 from spl_env.sim.world import MAX_PARTS_PER_BODY, BulletWorld, VisualPart
@@ -34,7 +34,12 @@ POLE_BAND_RGBA: dict[str, tuple[float, float, float, float]] = {
     "blue": (0.08, 0.30, 0.95, 1.0),
     "green": (0.0, 0.82, 0.52, 1.0),
 }
-POSTER_FILES = tuple(f"poster_{i:02d}.png" for i in range(12))
+# the poster sets of spl_env/assets/make_posters.py: "classic" (the default since the start)
+# and "textured" (upright structure along every row: natural landmarks on the horizon)
+POSTER_SETS = {
+    "classic": tuple(f"poster_{i:02d}.png" for i in range(12)),
+    "textured": tuple(f"textured_{i:02d}.png" for i in range(12)),
+}
 LINE_THICKNESS_M = 0.002  # painted-line boxes stand this proud of the carpet
 
 
@@ -52,6 +57,7 @@ class SceneConfig:
     ball_mass_kg: float = 0.044  # SPL ball mass
     ball_rolling_friction: float = 0.0015
     scene_seed: int = 0  # picks the posters when the world is built
+    poster_set: str = "classic"  # one of POSTER_SETS
     # People walking between the carpet and the boards (spl_env.scenes.spectators); 0: none
     spectators: int = 0
     spectator_speed_mps: float = 1.0
@@ -64,6 +70,7 @@ class SceneConfig:
             owner, "ball_rolling_friction", self.ball_rolling_friction, 0.0, 1.0, low_inclusive=True
         )
         check_int(owner, "scene_seed", self.scene_seed, 0)
+        check_choice(owner, "poster_set", self.poster_set, tuple(POSTER_SETS))
         check_int(owner, "spectators", self.spectators, 0)
         check_positive(owner, "spectator_speed_mps", self.spectator_speed_mps, upper=3.0)
         carpet_l = self.dimensions.carpet_size_m[0]
@@ -87,6 +94,7 @@ class SceneBodies:
     poles: dict[int, str]  # landmark id -> body name
     goal_posts: tuple[str, ...]
     ball: str
+    posters: dict[str, str]  # board panel body name -> its poster's file name
 
 
 def build_scene(world: BulletWorld, config: SceneConfig, rng: np.random.Generator) -> SceneBodies:
@@ -121,8 +129,7 @@ def build_scene(world: BulletWorld, config: SceneConfig, rng: np.random.Generato
                 name, _pole_parts(code, config.poles.geometry), base_position=(xy[0], xy[1], 0.0)
             )
             poles[code.landmark_id] = name
-    if config.boards_enabled:
-        _add_boards(world, config, rng)
+    posters = _add_boards(world, config, rng) if config.boards_enabled else {}
     radius = dims.ball_diameter_m / 2
     world.add_sphere(
         "ball",
@@ -133,7 +140,7 @@ def build_scene(world: BulletWorld, config: SceneConfig, rng: np.random.Generato
         rolling_friction=config.ball_rolling_friction,
         restitution=0.3,
     )
-    return SceneBodies(poles=poles, goal_posts=posts, ball="ball")
+    return SceneBodies(poles=poles, goal_posts=posts, ball="ball", posters=posters)
 
 
 def _flat_box(x0: float, y0: float, x1: float, y1: float, width: float) -> VisualPart:
@@ -239,14 +246,19 @@ def _pole_parts(code: PoleCode, geometry: PoleGeometry) -> list[VisualPart]:
     ]
 
 
-def _add_boards(world: BulletWorld, config: SceneConfig, rng: np.random.Generator) -> None:
-    """Boards around the carpet, one poster texture per panel, chosen by ``rng``."""
+def _add_boards(
+    world: BulletWorld, config: SceneConfig, rng: np.random.Generator
+) -> dict[str, str]:
+    """Boards around the carpet, one poster texture of ``config.poster_set`` per panel, chosen
+    by ``rng``; returns each panel's poster file name by body name."""
     carpet_l, carpet_w = config.dimensions.carpet_size_m
     hx = carpet_l / 2 + config.board_distance_m
     hy = carpet_w / 2 + config.board_distance_m
     h = config.board_height_m
     poster_dir = resources.files("spl_env") / "assets" / "posters"
+    files = POSTER_SETS[config.poster_set]
     panel = 0
+    posters: dict[str, str] = {}
     for along_x, fixed, span in (
         (True, hy, hx),
         (True, -hy, hx),
@@ -265,9 +277,11 @@ def _add_boards(world: BulletWorld, config: SceneConfig, rng: np.random.Generato
                 [VisualPart(shape="box", size=size, position=(0.0, 0.0, h / 2), rgba=BOARD_RGBA)],
                 base_position=(x, y, 0.0),
             )
-            poster = POSTER_FILES[int(rng.integers(len(POSTER_FILES)))]
+            poster = files[int(rng.integers(len(files)))]
             world.set_texture(name, str(poster_dir / poster))
+            posters[name] = poster
             panel += 1
+    return posters
 
 
 class SplFieldScene:

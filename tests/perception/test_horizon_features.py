@@ -14,7 +14,7 @@ from perception.landmarks.horizon_features import (
     horizon_features,
 )
 from perception.landmarks.surf1d import Surf1dFeatures
-from perception.providers.landmarks import WalkOdometry, _on_robots
+from perception.providers.landmarks import WalkOdometry, features_off_robots
 from perception.types import CameraModel, CameraState, RobotSighting
 
 CAMERA = CameraModel()
@@ -68,13 +68,14 @@ def test_features_on_a_sighted_robot_are_dropped() -> None:
     robot = RobotSighting(
         range_m=1.0, bearing_rad=0.0, cov=np.eye(2), box=np.array([120.0, 50.0, 160.0, 200.0])
     )
-    drop = _on_robots(found, (robot,))
-    assert drop.any() and not drop.all()
-    np.testing.assert_array_equal(drop, (found.features.x >= 120) & (found.features.x <= 160))
-    kept = found.without(drop)
+    kept = features_off_robots(found, (robot,))
+    on_robot = (found.features.x >= 120) & (found.features.x <= 160)
+    assert on_robot.any() and not on_robot.all()
     assert isinstance(kept, HorizonFeatures) and isinstance(kept.features, Surf1dFeatures)
-    assert len(kept) == int((~drop).sum())
-    np.testing.assert_array_equal(kept.bearings, found.bearings[~drop])
+    np.testing.assert_array_equal(kept.features.x, found.features.x[~on_robot])
+    np.testing.assert_array_equal(kept.bearings, found.bearings[~on_robot])
+    unboxed = RobotSighting(range_m=1.0, bearing_rad=0.0, cov=np.eye(2))  # not from an image
+    assert len(features_off_robots(found, (unboxed,))) == len(found)
 
 
 def test_the_reported_odometry_passes_the_walk_through() -> None:

@@ -152,3 +152,15 @@ def test_bad_configs_are_refused() -> None:
         VisualOdometryConfig(collision_smoothing=1.5)
     with pytest.raises((ValueError, TypeError), match="history"):
         VisualOdometryConfig(history=0)
+
+
+def test_a_turn_the_walk_cannot_have_made_falls_back_to_the_walk() -> None:
+    rng = np.random.default_rng(5)
+    azimuths = scene(rng)
+    odometry = VisualHeadingOdometry(CONFIG, same_id)
+    odometry.update(view(azimuths, 0.0), 0.0)
+    jump = CONFIG.max_disagreement_rad + 0.05  # a confident, wrong mode
+    step = odometry.update(view(azimuths, jump), walk_delta_rad=0.0)
+    assert not step.visual and step.delta_rad == 0.0
+    small = odometry.update(view(azimuths, jump + 0.02), walk_delta_rad=0.0)
+    assert small.visual and small.delta_rad == pytest.approx(0.02, abs=1e-12)

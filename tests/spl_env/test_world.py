@@ -11,7 +11,7 @@ import pytest
 from perception.geometry import project_points
 from spl_env.robots.nao import NaoRobot, RobotConfig
 from spl_env.scenes.spl_field import (
-    POSTER_FILES,
+    POSTER_SETS,
     SceneBodies,
     SceneConfig,
     SplFieldScene,
@@ -224,5 +224,17 @@ def test_field_scene_draws_posters_from_the_scene_seed_or_a_given_generator(
     assert posters(SceneConfig(scene_seed=3), poster_rng=rng) == seeded
     reference = np.random.default_rng(7)
     for _ in seeded:  # one draw per panel
-        reference.integers(len(POSTER_FILES))
+        reference.integers(len(POSTER_SETS["classic"]))
     assert rng.integers(1 << 30) == reference.integers(1 << 30)
+
+
+def test_the_scene_names_each_panels_poster_from_the_set_asked_for() -> None:
+    for poster_set, files in POSTER_SETS.items():
+        world = BulletWorld(time_step_s=0.01)
+        scene = SplFieldScene(world, SceneConfig(scene_seed=5, poster_set=poster_set))
+        painted = scene.bodies.posters
+        assert len(painted) > 10 and set(painted.values()) <= set(files)
+        assert all(world.body(name) >= 0 for name in painted)
+        world.close()
+    with pytest.raises(ValueError, match="poster_set"):
+        SceneConfig(poster_set="plain")
