@@ -58,7 +58,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from perception.field.features import FieldFeature
+from perception.field.features import FeatureKind, FieldFeature
 from perception.field.field_map import FieldMap, MapFeature
 from perception.geometry import (
     FloatArray,
@@ -204,7 +204,11 @@ def evaluate_frame(
 ) -> None:
     """Add one frame's matches and errors to ``stats`` (per kind lists and counters)."""
     cam = scene.camera.config.model
-    for kind, ids in (("line", scene.line_ids), ("field_edge", [scene.carpet_id])):
+    segment_kinds: tuple[tuple[FeatureKind, list[int]], ...] = (
+        ("line", scene.line_ids),
+        ("field_edge", [scene.carpet_id]),
+    )
+    for kind, ids in segment_kinds:
         targets = list(field.of_kind(kind))
         found = set()
         for f in (f for f in features if f.kind == kind):
@@ -228,8 +232,15 @@ def evaluate_frame(
                     stats[group]["should"] += 1
                     stats[group]["recalled"] += k in found
     lines = [t.points for t in field.of_kind("line")]
-    point_kinds = ("corner", "t_junction", "x_junction", "centre_circle", "penalty_mark")
-    for kind in (*point_kinds, "goal_post"):
+    point_kinds: tuple[FeatureKind, ...] = (
+        "corner",
+        "t_junction",
+        "x_junction",
+        "centre_circle",
+        "penalty_mark",
+        "goal_post",
+    )
+    for kind in point_kinds:
         targets = list(field.of_kind(kind))
         tol = FAR_POINT_TOL_M if kind == "goal_post" else POINT_TOL_M
         found = set()

@@ -12,27 +12,220 @@ mark or a post (its foot) when its point is in view; the centre circle when a
 Noise: each point moves by an isotropic Gaussian of standard deviation
 ``point_std_m + point_std_per_m * d`` at distance ``d`` (m) from the robot, its reported
 covariance; a direction by ``direction_std_rad``. Not fitted to a detector: a configuration.
+Without a generator the features are exact (no noise), with the same covariances.
+
+:func:`detected_features` (:func:`detect` per feature) turns exact features into what the
+rendered detector (:mod:`perception.vision.field_features`) would report of them by a
+:class:`DetectorModel` (``FeatureViewConfig.detector``, fitted by
+``benchmarks/fit_geometric_field_features.py``): each is found with its kind's recall in its
+range band and moved by its kind's noise. The geometric camera mode's emulator
+(:mod:`spl_env.sensors.emulation.field`) applies it, after the camera's sway; neither
+:func:`visible_features` nor the oracle provider does, and their noise is as above.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
-from dataclasses import dataclass
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
 
-from perception.field.features import SEGMENT_KINDS, FieldFeature
+from perception.field.features import (
+    DIRECTED_KINDS,
+    FEATURE_KINDS,
+    SEGMENT_KINDS,
+    FieldFeature,
+)
 from perception.field.field_map import FieldMap, MapFeature
 from perception.geometry import FloatArray, project_points
 from perception.types import CameraModel, CameraState
-from perception.validation import check_positive, finite_vector
+from perception.validation import (
+    InvalidTypeError,
+    check_in_interval,
+    check_positive,
+    finite_vector,
+)
+
+# the kinds that may carry a direction (the centre circle's only when the halfway line is seen)
+DIRECTION_KINDS: tuple[str, ...] = tuple(
+    k for k in FEATURE_KINDS if k in DIRECTED_KINDS or k == "centre_circle"
+)
+
+# DetectorModel's defaults: fitted by benchmarks/fit_geometric_field_features.py on 3000
+# rendered frames of NoPoles patrols (tuning seeds 0-4, 30 s each under the head scan and under
+# random head targets), benchmarks/results/geometric_field_features.json ("model"). With the
+# camera's sway taken out (the emulator adds it exactly), the detector errs by a few mm (median
+# 2-5 mm) on lines, corners, T junctions and penalty marks, 1.5-2 cm on the centre circle, its
+# crossings and the goal posts; with it, medians of 3-9 cm. Emulated at the fit's frames, the
+# recall, noise and reported-covariance scale are within a few per cent of the detector's (the
+# JSON's "at_fit").
+_FITTED_BANDS_M = (1.0, 2.0, 3.0, 4.0, 6.0, 8.0)
+_FITTED_RECALL: dict[str, tuple[float, ...]] = {
+    "line": (0.927, 0.967, 0.919, 0.815, 0.435, 0.0),
+    "field_edge": (0.973, 0.973, 0.936, 0.965, 0.933, 0.722),
+    "corner": (0.613, 0.624, 0.603, 0.448, 0.103, 0.0),
+    "t_junction": (0.529, 0.529, 0.729, 0.59, 0.137, 0.0),
+    "x_junction": (0.773, 0.896, 0.859, 0.702, 0.0, 0.0),
+    "centre_circle": (1.0, 0.98, 0.917, 0.779, 0.0, 0.0),
+    "penalty_mark": (0.525, 0.528, 0.77, 0.374, 0.0, 0.0),
+    "goal_post": (0.5, 0.5, 0.389, 0.281, 0.242, 0.0),
+}
+# (a m, b per m): the noise's std a + b * range
+_FITTED_POINT_STD_M: dict[str, tuple[float, float]] = {
+    "line": (0.0001, 0.0024),
+    "field_edge": (0.0367, 0.0064),
+    "corner": (0.0001, 0.0022),
+    "t_junction": (0.0001, 0.0015),
+    "x_junction": (0.0202, 0.0053),
+    "centre_circle": (0.0201, 0.0115),
+    "penalty_mark": (0.0001, 0.0019),
+    "goal_post": (0.0193, 0.0066),
+}
+_FITTED_DIRECTION_STD_RAD: dict[str, float] = {
+    "corner": 0.0317,
+    "t_junction": 0.0027,
+    "x_junction": 0.0011,
+    "centre_circle": 0.0012,
+}
+_FITTED_REPORTED_DIRECTION_STD_RAD: dict[str, float] = {
+    "corner": 0.0475,
+    "t_junction": 0.0432,
+    "x_junction": 0.0243,
+    "centre_circle": 0.025,
+}
+
+
+@dataclass(frozen=True, kw_only=True)
+class DetectorModel:
+    """What the rendered field-feature detector misses and how far off it is, per feature kind
+    (:func:`detected_features`); the defaults are fitted (module comment above them).
+
+    ``bands_m``: the upper edges (m, > 0, increasing) of the range bands; nothing beyond the
+    last is seen. ``recall``: every kind -> the chance (in [0, 1]) that a feature in view in
+    each band is found (one per band). ``point_std_m``: every kind -> ``(a, b)``, each point's
+    noise standard deviation per axis ``a + b * d`` at its distance ``d`` (m; a > 0, b >= 0).
+    ``direction_std_rad``: each kind that may carry a direction (:data:`DIRECTION_KINDS`) ->
+    its noise (> 0); ``reported_direction_std_rad``: -> the standard deviation the detector
+    reports with it (its information's equivalent: ``1 / sqrt(mean(1 / std**2))``), which the
+    emulator reports too.
+    """
+
+    bands_m: tuple[float, ...] = _FITTED_BANDS_M
+    recall: Mapping[str, tuple[float, ...]] = field(default_factory=lambda: dict(_FITTED_RECALL))
+    point_std_m: Mapping[str, tuple[float, float]] = field(
+        default_factory=lambda: dict(_FITTED_POINT_STD_M)
+    )
+    direction_std_rad: Mapping[str, float] = field(
+        default_factory=lambda: dict(_FITTED_DIRECTION_STD_RAD)
+    )
+    reported_direction_std_rad: Mapping[str, float] = field(
+        default_factory=lambda: dict(_FITTED_REPORTED_DIRECTION_STD_RAD)
+    )
+
+    def __post_init__(self) -> None:
+        owner = "DetectorModel"
+        bands = _numbers(owner, "bands_m", self.bands_m)
+        if not bands:
+            raise ValueError(f"{owner}.bands_m must hold at least one band edge, got ()")
+        for k, edge in enumerate(bands):
+            check_positive(owner, f"bands_m[{k}]", edge)
+        if any(b <= a for a, b in itertools.pairwise(bands)):
+            raise ValueError(f"{owner}.bands_m must increase, got {bands!r}")
+        recall = _per_kind(owner, "recall", self.recall, FEATURE_KINDS)
+        for kind, values in recall.items():
+            name = f"recall[{kind!r}]"
+            values = _numbers(owner, name, values)
+            if len(values) != len(bands):
+                raise ValueError(
+                    f"{owner}.{name} must hold one recall per band ({len(bands)}), "
+                    f"got {len(values)}"
+                )
+            for k, value in enumerate(values):
+                check_in_interval(
+                    owner, f"{name}[{k}]", value, 0.0, 1.0, low_inclusive=True, high_inclusive=True
+                )
+            recall[kind] = values
+        noise = _per_kind(owner, "point_std_m", self.point_std_m, FEATURE_KINDS)
+        for kind, pair in noise.items():
+            name = f"point_std_m[{kind!r}]"
+            pair = _numbers(owner, name, pair)
+            if len(pair) != 2:
+                raise ValueError(f"{owner}.{name} must be (a, b), got {pair!r}")
+            check_positive(owner, f"{name}[0]", pair[0])
+            check_positive(owner, f"{name}[1]", pair[1], allow_zero=True)
+            noise[kind] = (pair[0], pair[1])
+        directions = {}
+        for name in ("direction_std_rad", "reported_direction_std_rad"):
+            stds = _per_kind(owner, name, getattr(self, name), DIRECTION_KINDS)
+            for kind, std in stds.items():
+                check_positive(owner, f"{name}[{kind!r}]", std)
+            directions[name] = stds
+        object.__setattr__(self, "bands_m", bands)
+        object.__setattr__(self, "recall", recall)
+        object.__setattr__(self, "point_std_m", noise)
+        for name, stds in directions.items():
+            object.__setattr__(self, name, stds)
+
+    @property
+    def max_range_m(self) -> float:
+        """How far the detector sees anything (m): the last band's edge."""
+        return self.bands_m[-1]
+
+    def band(self, distance_m: float) -> int:
+        """The index of the band ``distance_m`` falls in (``len(bands_m)`` beyond the last)."""
+        return int(np.searchsorted(self.bands_m, distance_m, side="left"))
+
+    def recall_at(self, kind: str, distance_m: float) -> float:
+        """The chance a ``kind`` in view at ``distance_m`` is found (0 beyond the bands)."""
+        band = self.band(distance_m)
+        return self.recall[kind][band] if band < len(self.bands_m) else 0.0
+
+    def std_at(self, kind: str, distance_m: FloatArray) -> FloatArray:
+        """The noise standard deviation per axis (m) of ``kind``'s points at ``distance_m``."""
+        a, b = self.point_std_m[kind]
+        return a + b * np.asarray(distance_m, dtype=np.float64)
+
+
+def _numbers(owner: str, name: str, values: object) -> tuple[float, ...]:
+    """``values`` as a tuple of floats, or InvalidTypeError naming ``owner.name``."""
+    if not isinstance(values, tuple | list):
+        raise InvalidTypeError(
+            f"{owner}.{name} must be a tuple of numbers, got {type(values).__name__}"
+        )
+    for k, value in enumerate(values):
+        if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+            raise InvalidTypeError(
+                f"{owner}.{name}[{k}] must be a real number, got {type(value).__name__} {value!r}"
+            )
+    return tuple(float(v) for v in values)
+
+
+def _per_kind(owner: str, name: str, mapping: object, kinds: Iterable[str]) -> dict[str, object]:
+    """``mapping`` as a dict with exactly the keys ``kinds``, or ValueError naming the field."""
+    if not isinstance(mapping, Mapping):
+        raise InvalidTypeError(
+            f"{owner}.{name} must be a mapping kind -> value, got {type(mapping).__name__}"
+        )
+    expected = set(kinds)
+    missing, extra = expected - set(mapping), set(mapping) - expected
+    if missing or extra:
+        raise ValueError(
+            f"{owner}.{name} must have one entry per kind {tuple(kinds)}: "
+            f"missing {sorted(missing)}, unknown {sorted(map(str, extra))}"
+        )
+    return {kind: mapping[kind] for kind in kinds}
 
 
 @dataclass(frozen=True, kw_only=True)
 class FeatureViewConfig:
     """Settings of :func:`visible_features` (module docstring; m, px, rad; all > 0 but
-    ``margin_px`` >= 0; ``min_circle_fraction`` in (0, 1])."""
+    ``margin_px`` >= 0; ``min_circle_fraction`` in (0, 1]), and ``detector``, the model of
+    the rendered detector that the geometric camera mode's emulator applies
+    (:func:`detected_features`; its range, the last band's edge, replaces ``max_range_m``
+    there, and its noise the ``*_std_*`` here, which are the oracle's)."""
 
     max_range_m: float = 4.0
     min_line_m: float = 0.3
@@ -42,9 +235,14 @@ class FeatureViewConfig:
     point_std_m: float = 0.02
     point_std_per_m: float = 0.02
     direction_std_rad: float = 0.03
+    detector: DetectorModel = field(default_factory=DetectorModel)
 
     def __post_init__(self) -> None:
         owner = "FeatureViewConfig"
+        if not isinstance(self.detector, DetectorModel):
+            raise InvalidTypeError(
+                f"{owner}.detector must be a DetectorModel, got {type(self.detector).__name__}"
+            )
         for name in (
             "max_range_m",
             "min_line_m",
@@ -97,6 +295,7 @@ class _View:
         self.pose, self.camera, self.state, self.config = pose, camera, state, config
         c, s = math.cos(pose[2]), math.sin(pose[2])
         self.to_robot = np.array([[c, -s], [s, c]])  # rows: field -> robot via points @ this
+        self.rotation = state.rotation()
 
     def robot_points(self, points: FloatArray) -> FloatArray:
         """Field-frame ``points`` (N, 2) in the robot frame."""
@@ -106,7 +305,7 @@ class _View:
         """Which field-frame ground ``points`` (N, 2) are in view (N,) bool."""
         robot = self.robot_points(np.atleast_2d(points))
         ground = np.column_stack([robot, np.zeros(len(robot))])
-        in_camera = (ground - self.state.position) @ self.state.rotation()
+        in_camera = (ground - self.state.position) @ self.rotation
         cam = self.camera
         uv, front = project_points(in_camera, cam.fx, cam.fy, cam.cx, cam.cy)
         m = self.config.margin_px
@@ -128,17 +327,14 @@ class _View:
         t = np.linspace(0.0, 1.0, n)
         samples = segment[0] + t[:, None] * (segment[1] - segment[0])
         seen = self.sees(samples)
-        best, start = (0, 0), None
-        for i, flag in enumerate([*seen.tolist(), False]):
-            if flag and start is None:
-                start = i
-            elif not flag and start is not None:
-                if i - start > best[1] - best[0]:
-                    best = (start, i)
-                start = None
-        if best[1] - best[0] < 2:
+        step = np.diff(np.concatenate([[0], seen.astype(np.int8), [0]]))
+        starts, stops = np.flatnonzero(step == 1), np.flatnonzero(step == -1)
+        if len(starts) == 0:
             return None
-        ends = samples[[best[0], best[1] - 1]]
+        best = int(np.argmax(stops - starts))  # the first of the longest runs
+        if stops[best] - starts[best] < 2:
+            return None
+        ends = samples[[starts[best], stops[best] - 1]]
         if float(np.linalg.norm(ends[1] - ends[0])) < self.config.min_line_m:
             return None
         return ends
@@ -172,3 +368,58 @@ class _View:
         cov = np.einsum("n,ij->nij", std**2, np.eye(2))
         direction_std = math.nan if direction is None else cfg.direction_std_rad
         return FieldFeature(feature.kind, robot, cov, direction, direction_std)
+
+
+def detected_features(
+    features: Iterable[FieldFeature], model: DetectorModel, rng: np.random.Generator
+) -> tuple[FieldFeature, ...]:
+    """What the detector would report of the exact ``features`` (robot frame), by ``model``
+    (:func:`detect` each, in order): each reported with the covariance and direction standard
+    deviation of its noise; no false detections are added."""
+    out = []
+    for f in features:
+        found = detect(f.kind, f.points, f.direction, model, rng)
+        if found is None:
+            continue
+        points, direction = found
+        std = model.std_at(f.kind, np.hypot(f.points[:, 0], f.points[:, 1]))
+        cov = np.einsum("n,ij->nij", std**2, np.eye(2))
+        if direction is None:
+            out.append(FieldFeature(f.kind, points, cov))
+        else:
+            out.append(
+                FieldFeature(f.kind, points, cov, direction, model.direction_std_rad[f.kind])
+            )
+    return tuple(out)
+
+
+def detect(
+    kind: str,
+    points: FloatArray,
+    direction: float | None,
+    model: DetectorModel,
+    rng: np.random.Generator,
+) -> tuple[FloatArray, float | None] | None:
+    """One exact feature of ``kind`` at ``points`` (P, 2) (robot frame) with ``direction`` as
+    the detector would find it by ``model``, or None when it misses it: found with its kind's
+    recall at its distance (:func:`feature_distance`; nothing beyond the last band), each point
+    then moved by an isotropic Gaussian of its kind's ``a + b * d`` at that point's distance
+    ``d``, the direction by its kind's direction noise. Draws, in order: a uniform, then (if
+    found) the points' normals, then the direction's."""
+    if rng.uniform() >= model.recall_at(kind, feature_distance(kind, points)):
+        return None
+    std = model.std_at(kind, np.hypot(points[:, 0], points[:, 1]))
+    noisy = points + rng.normal(0.0, 1.0, points.shape) * std[:, None]
+    if direction is None:
+        return noisy, None
+    return noisy, direction + float(rng.normal(0.0, model.direction_std_rad[kind]))
+
+
+def feature_distance(kind: str, points: FloatArray) -> float:
+    """:attr:`FieldFeature.distance_m` of a ``kind`` at ``points`` (P, 2): the distance (m)
+    from the robot to its nearest point (a segment's nearest point between its ends)."""
+    if kind not in SEGMENT_KINDS:
+        return float(np.hypot(*points[0]))
+    a, b = points
+    t = float(np.clip(-(a @ (b - a)) / float((b - a) @ (b - a)), 0.0, 1.0))
+    return float(np.hypot(*(a + t * (b - a))))

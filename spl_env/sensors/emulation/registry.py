@@ -58,7 +58,9 @@ def _field_features(bottom: bool) -> EmulatorFactory:
     ) -> GeometricFieldFeatures:
         field_map = FieldMap(scene.dimensions)
         model, view = sensors.camera.model, perception.feature_view
-        return GeometricFieldFeatures(field_map, model, view, bottom=bottom)
+        return GeometricFieldFeatures(
+            field_map, model, view, bottom=bottom, detector=perception.field_detector
+        )
 
     return build
 
