@@ -17,7 +17,13 @@ _NO_POLES = {
     "SPL/ActiveVision-NoPoles-v1": "SPL/ActiveVision-v1",
     "SPL/LookAround-NoPoles-v0": "SPL/LookAround-v0",
 }
-NO_POLES_KWARGS = {"scene.poles_enabled": False, "self_pose": "field_features"}
+# without poles the robot localises from field features, with the textured posters around
+# the field: natural landmarks on the horizon (seed 004 ch. 3-5) need upright structure
+NO_POLES_KWARGS = {
+    "scene.poles_enabled": False,
+    "scene.poster_set": "textured",
+    "self_pose": "field_features",
+}
 _ENTRY_POINTS = {
     "SPL/ActiveVision-v0": "spl_env.envs.active_vision:ActiveVisionEnv",
     "SPL/ActiveVision-v1": "spl_env.envs.active_vision_robots:ActiveVisionRobotsEnv",

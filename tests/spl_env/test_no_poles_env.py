@@ -70,9 +70,11 @@ def test_the_pole_slam_cannot_run_without_poles() -> None:
         gym.make("SPL/ActiveVision-v1", **{"scene.poles_enabled": False})
 
 
-def test_the_no_poles_ids_are_their_pole_envs_with_two_settings() -> None:
-    assert NO_POLES_KWARGS == {"scene.poles_enabled": False, "self_pose": "field_features"}
+def test_the_no_poles_ids_are_their_pole_envs_with_the_no_poles_settings() -> None:
     a = gym.make("SPL/ActiveVision-NoPoles-v1", episode_s=1.0, **GEOMETRIC)
+    config = a.unwrapped.config
+    assert not config.scene.poles_enabled and config.scene.poster_set == "textured"
+    assert config.perception.self_pose == "field_features"
     b = gym.make("SPL/ActiveVision-v1", episode_s=1.0, **GEOMETRIC, **NO_POLES_KWARGS)
     obs_a, _ = a.reset(seed=2)
     obs_b, _ = b.reset(seed=2)
