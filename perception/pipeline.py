@@ -27,6 +27,8 @@ Provider choice, by representation (:data:`PROVIDERS`; the defaults of
     odometry_delta ──► odometry [reported]
     odometry_delta, horizon_features, robot_sightings ──► odometry [visual]
     odometry ──► odometry_pose [dead_reckoning]
+    horizon_features, robot_sightings, field_features, self_pose (the last frame's)
+                                  ──► field_end [none | bag_of_words] ──► self_pose [field_features]
 
 A representation an emulator delivers (``emulated``: the geometric camera mode's pole
 sightings) is read from :attr:`perception.types.SensorFrame.emulated` instead of a provider.
@@ -54,8 +56,14 @@ from perception.providers.field import (
     FieldFeatureHistory,
     FieldFeaturePose,
     OracleFieldFeatures,
+    RelocalisationConfig,
     TwoCameraFieldFeatures,
     VisionFieldFeatures,
+)
+from perception.providers.field_end import (
+    FieldEndProviderConfig,
+    NaturalLandmarkFieldEnd,
+    UnknownFieldEnd,
 )
 from perception.providers.landmarks import (
     HorizonFeatureProvider,
@@ -86,6 +94,7 @@ from perception.providers.robots import (
 from perception.providers.slam import EkfSlamProvider
 from perception.representations import (
     CIRCLE_MAP,
+    FIELD_END,
     FIELD_FEATURE_LAST_SEEN,
     FIELD_FEATURES,
     FRAME_INPUTS,
@@ -116,6 +125,7 @@ from perception.vision.field_features import FieldFeatureConfig
 from perception.vision.robots import RobotDetectorConfig
 
 ProviderFactory = Callable[["PipelineConfig", PerceptionContext], Provider]
+PREVIOUS = "previous_"  # key prefix of the representations a provider reads one frame late
 
 # representation -> provider name -> how to build it
 PROVIDERS: Mapping[str, Mapping[str, ProviderFactory]] = {
@@ -125,6 +135,10 @@ PROVIDERS: Mapping[str, Mapping[str, ProviderFactory]] = {
     },
     ODOMETRY_POSE: {"dead_reckoning": lambda c, ctx: DeadReckoning()},
     HORIZON_FEATURES: {"surf1d": lambda c, ctx: HorizonFeatureProvider(c.horizon, ctx)},
+    FIELD_END: {
+        "none": lambda c, ctx: UnknownFieldEnd(),
+        "bag_of_words": lambda c, ctx: NaturalLandmarkFieldEnd(c.natural_landmarks),
+    },
     IMAGE_DETECTIONS: {"cnn": lambda c, ctx: CnnDetections(c.cnn, ctx)},
     POLE_SIGHTINGS: {
         "cnn": lambda c, ctx: CnnPoleSightings(c.cnn, c.cnn_pole_score_threshold, ctx),
@@ -136,7 +150,9 @@ PROVIDERS: Mapping[str, Mapping[str, ProviderFactory]] = {
         "ekf_slam": lambda c, ctx: EkfSlamProvider(c.slam),
         "oracle": lambda c, ctx: OracleSelfPose(c.oracle),
         "circle_slam": lambda c, ctx: CircleSlamProvider(c.circle_slam, c.scan_circles),
-        "field_features": lambda c, ctx: FieldFeaturePose(c.sensor_model, c.pose_filter, ctx),
+        "field_features": lambda c, ctx: FieldFeaturePose(
+            c.sensor_model, c.pose_filter, c.relocalisation, ctx
+        ),
     },
     ROBOT_SIGHTINGS: {
         "vision": lambda c, ctx: VisionRobotSightings(c.vision_robots, c.sonar_filter, ctx),
@@ -228,6 +244,7 @@ class PipelineConfig:
     pose_filter: PoseFilterConfig = field(
         default_factory=lambda: PoseFilterConfig(observation_weight=0.1)
     )
+    relocalisation: RelocalisationConfig = field(default_factory=RelocalisationConfig)
     # The odometry every pose estimator (and dead reckoning) uses: the robot's report
     # (walk engine, wheel encoders), or its heading change replaced by the visual heading
     # odometry of the horizon's 1D SURF features (seed 004 ch. 5; needs rendered images)
@@ -236,6 +253,10 @@ class PipelineConfig:
     visual_odometry: VisualOdometryProviderConfig = field(
         default_factory=VisualOdometryProviderConfig
     )
+    # Which end of the (symmetric) field the robot faces, for self_pose="field_features":
+    # unknown, or recognised from natural landmarks on the horizon (seed 004 ch. 4)
+    field_end: str = "none"  # one of PROVIDERS["field_end"]
+    natural_landmarks: FieldEndProviderConfig = field(default_factory=FieldEndProviderConfig)
 
     def __post_init__(self) -> None:
         for representation in PROVIDERS:
@@ -281,6 +302,7 @@ class PerceptionPipeline:
     ) -> None:
         self.config = config
         self._providers: dict[str, Provider] = {}  # in dependency order
+        self._previous: dict[str, Any] = {}  # the last frame's representations
         inputs: set[str] = set()
         reached: set[str] = set()  # of the emulated representations, those something reads
         visiting: list[str] = []
@@ -307,9 +329,13 @@ class PerceptionPipeline:
                 resolve(required)
             visiting.pop()
             self._providers[name] = provider
+            later.extend(provider.requires_previous)
 
+        later: list[str] = []  # read one frame late: resolved after everything else
         for name in outputs:
             resolve(name)
+        while later:
+            resolve(later.pop(0))
         self.frame_inputs = frozenset(inputs)  # the SensorFrame fields the providers read
         self.emulated = frozenset(reached)  # the emulated representations it reads
 
@@ -327,6 +353,7 @@ class PerceptionPipeline:
         one. Each gets its own generator spawned from ``rng`` (one per known representation, in a
         fixed order, whether or not it runs), so which providers run changes no draw of another
         and ``rng``'s own stream is not advanced."""
+        self._previous = {}
         generators = dict(zip(REPRESENTATIONS, rng.spawn(len(REPRESENTATIONS)), strict=True))
         for name, provider in self._providers.items():
             provider.reset(Prior(pose=pose, rng=generators[name]))
@@ -347,7 +374,10 @@ class PerceptionPipeline:
         computed: dict[str, Any] = {}
         for name, provider in self._providers.items():
             needed = {r: values[r] for r in provider.requires}
+            for r in provider.requires_previous:
+                needed[PREVIOUS + r] = self._previous.get(r)
             values[name] = computed[name] = provider.update(needed, frame.time_s)
         for name in self.emulated:
             computed[name] = values[name]
+        self._previous = computed
         return PerceptionOutput(time_s=frame.time_s, representations=computed)

@@ -32,6 +32,8 @@ name                   value
                        this frame's 1D SURF features on the horizon, with bearings
 ``odometry``           :class:`perception.types.OdometryStep`: the motion since the last
                        frame the pose estimators use (the walk's, or with the visual heading)
+``field_end``          :class:`perception.landmarks.field_end.FieldEndBelief`: P(facing the
+                       away goal) from natural landmarks, and whether it is certain
 =====================  ================================================================
 """
 
@@ -59,6 +61,7 @@ FIELD_FEATURES = "field_features"
 FIELD_FEATURE_LAST_SEEN = "field_feature_last_seen"
 HORIZON_FEATURES = "horizon_features"
 ODOMETRY = "odometry"
+FIELD_END = "field_end"
 REPRESENTATIONS = (
     ODOMETRY_POSE,
     IMAGE_DETECTIONS,
@@ -73,6 +76,7 @@ REPRESENTATIONS = (
     FIELD_FEATURE_LAST_SEEN,
     HORIZON_FEATURES,
     ODOMETRY,
+    FIELD_END,
 )
 
 # the SensorFrame fields a provider may read (all but its time and the emulated representations)

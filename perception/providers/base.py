@@ -19,11 +19,15 @@ class Provider(ABC):
     """Computes one representation per frame.
 
     ``provides`` names the representation; ``requires`` the sensor inputs (fields of
-    :class:`perception.types.SensorFrame`) and representations :meth:`update` reads.
+    :class:`perception.types.SensorFrame`) and representations :meth:`update` reads;
+    ``requires_previous`` representations it reads as they were after the previous frame
+    (keys ``previous_<name>``, None on an episode's first frame): a loop such as a pose
+    filter reading a recogniser that reads the pose runs one frame apart, without a cycle.
     """
 
     provides: ClassVar[str]
     requires: ClassVar[tuple[str, ...]]
+    requires_previous: ClassVar[tuple[str, ...]] = ()
 
     def reset(self, prior: Prior) -> None:  # noqa: B027  (stateless providers keep nothing)
         """Start an episode from ``prior``; stateless providers need not override this."""

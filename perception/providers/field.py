@@ -4,13 +4,17 @@
 :mod:`perception.vision.field_features`) or :class:`OracleFieldFeatures` (the map's features in
 view of the camera at the true pose, with configured noise). ``self_pose``:
 :class:`FieldFeaturePose`, the pose filter (:mod:`perception.field.pose_filter`) predicting
-with the walk odometry and fusing each frame's pose observation from the unified sensor model
-(:mod:`perception.field.sensor_model`), started at the episode's prior pose.
+with the odometry (the walk's, or with the visual heading) and fusing each frame's pose
+observation from the unified sensor model (:mod:`perception.field.sensor_model`), started at
+the episode's prior pose, relocalising when lost and told the field's end by natural landmarks.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
@@ -20,14 +24,18 @@ from perception.field.field_map import FieldMap
 from perception.field.pose_filter import PoseFilter, PoseFilterConfig
 from perception.field.sensor_model import SensorModelConfig, observe_pose
 from perception.field.visibility import FeatureViewConfig, visible_features
+from perception.landmarks.field_end import AWAY, HOME, FieldEndBelief
 from perception.providers.base import PerceptionContext, Provider
 from perception.representations import (
+    FIELD_END,
     FIELD_FEATURE_LAST_SEEN,
     FIELD_FEATURES,
+    ODOMETRY,
     SELF_POSE,
     Prior,
 )
 from perception.types import CameraModel, GroundTruth, SlamEstimate
+from perception.validation import check_int
 from perception.vision.field_features import FieldFeatureConfig, detect_field_features
 
 
@@ -111,22 +119,49 @@ class FieldFeatureHistory(Provider):
         return dict(self._last_seen)
 
 
+@dataclass(frozen=True, kw_only=True)
+class RelocalisationConfig:
+    """When the field-feature pose filter counts itself lost and starts again from one frame:
+    after ``after_refused_frames`` frames in a row whose pose observation the gate refused (a
+    kidnap, a fall, a filter that drifted off), the frame's features are placed from a start
+    per candidate (:class:`perception.field.sensor_model.SensorModelConfig` ``starts=
+    "hypotheses"``, ``order="candidates"``) and, when that fixes all three components, the
+    filter restarts there, its covariance the observation's (the share the filter fuses of
+    it: ``PoseFilterConfig.observation_weight``). 0 never relocalises."""
+
+    after_refused_frames: int = 8
+
+    def __post_init__(self) -> None:
+        check_int("RelocalisationConfig", "after_refused_frames", self.after_refused_frames, 0)
+
+
 class FieldFeaturePose(Provider):
-    """The robot pose from walk odometry and field features: one pose-filter prediction per
+    """The robot pose from odometry and field features: one pose-filter prediction per
     odometry increment and one update per frame whose features the sensor model places
-    consistently (a refused observation, or a gated one, changes nothing). The estimate holds
-    no landmarks: the field's map is known."""
+    consistently (a refused observation, or a gated one, changes nothing); a relocalisation
+    when lost (:class:`RelocalisationConfig`). The field is symmetric end to end: when the
+    natural landmarks are certain which end the camera faces (``field_end``, seed 004 ch. 4)
+    and this frame's own votes agree, a filter facing the other end is mirrored through the
+    centre spot, ``(x, y, theta) -> (-x, -y, theta + pi)`` (the seed re-initialises it facing
+    that end). The estimate holds no landmarks: the field's map is known."""
 
     provides = SELF_POSE
-    requires = ("odometry_delta", FIELD_FEATURES)
+    requires = (ODOMETRY, FIELD_FEATURES, FIELD_END, "camera_state")
 
     def __init__(
-        self, model: SensorModelConfig, config: PoseFilterConfig, context: PerceptionContext
+        self,
+        model: SensorModelConfig,
+        config: PoseFilterConfig,
+        relocalisation: RelocalisationConfig,
+        context: PerceptionContext,
     ) -> None:
         self.model = model
         self.config = config
+        self.relocalisation = relocalisation
+        self.global_model = dataclasses.replace(model, starts="hypotheses", order="candidates")
         self.field_map = context.field_map
         self._filter: PoseFilter | None = None
+        self._refused = 0  # frames in a row whose observation the gate refused
 
     @property
     def filter(self) -> PoseFilter:
@@ -137,15 +172,20 @@ class FieldFeaturePose(Provider):
 
     def reset(self, prior: Prior) -> None:
         self._filter = PoseFilter(self.config, prior.pose)
+        self._refused = 0
 
     def update(self, inputs: Mapping[str, Any], time_s: float) -> SlamEstimate:
         pose_filter = self.filter
-        pose_filter.predict(inputs["odometry_delta"])
+        pose_filter.predict(inputs[ODOMETRY].delta)
+        self._face_the_recognised_end(inputs[FIELD_END], inputs["camera_state"].head_yaw)
         features = inputs[FIELD_FEATURES]
         if features:
             result = observe_pose(features, pose_filter.pose, self.field_map, self.model)
             if result.observation is not None:
-                pose_filter.update(result.observation)
+                self._refused = 0 if pose_filter.update(result.observation) else self._refused + 1
+            limit = self.relocalisation.after_refused_frames
+            if limit and self._refused >= limit:
+                self._relocalise(features)
         return SlamEstimate(
             pose=pose_filter.pose,
             pose_cov=pose_filter.cov,
@@ -153,3 +193,28 @@ class FieldFeaturePose(Provider):
             landmarks=np.zeros((0, 2)),
             landmark_covs=np.zeros((0, 2, 2)),
         )
+
+    def _face_the_recognised_end(self, belief: FieldEndBelief, head_yaw: float) -> None:
+        """Mirror the filter through the centre spot when a certain belief, which this frame's
+        votes agree with, says the camera faces the end the filter's heading does not."""
+        votes_agree = belief.votes * belief.certain > 0
+        if belief.certain == 0 or not votes_agree:
+            return
+        pose_filter = self.filter
+        x, y, theta = pose_filter.pose
+        facing = AWAY if math.cos(theta + head_yaw) > 0 else HOME
+        if facing != belief.certain:
+            flip = np.diag([-1.0, -1.0, 1.0])  # the half turn about the centre spot
+            pose_filter.reset(np.array([-x, -y, theta + math.pi]), flip @ pose_filter.cov @ flip)
+
+    def _relocalise(self, features: tuple[FieldFeature, ...]) -> None:
+        """Restart the filter where this frame's features alone put the robot, if they fix
+        the whole pose (:class:`RelocalisationConfig`)."""
+        pose_filter = self.filter
+        result = observe_pose(features, pose_filter.pose, self.field_map, self.global_model)
+        observation = result.observation
+        if observation is None or np.linalg.matrix_rank(observation.information) < 3:
+            return
+        information = self.config.observation_weight * observation.information
+        pose_filter.reset(observation.pose, np.linalg.inv(information))
+        self._refused = 0

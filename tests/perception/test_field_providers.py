@@ -10,10 +10,26 @@ import pytest
 
 from perception.field.visibility import FeatureViewConfig
 from perception.geometry import compose, wrap_angle
+from perception.landmarks.field_end import AWAY, FieldEndBelief
 from perception.pipeline import PerceptionPipeline, PipelineConfig
 from perception.providers.base import PerceptionContext
-from perception.representations import FIELD_FEATURES, ODOMETRY_POSE, SELF_POSE
-from perception.types import CameraModel, CameraState, GroundTruth, PoleGeometry, SensorFrame
+from perception.providers.field import FieldFeaturePose, RelocalisationConfig
+from perception.representations import (
+    FIELD_END,
+    FIELD_FEATURES,
+    ODOMETRY,
+    ODOMETRY_POSE,
+    SELF_POSE,
+    Prior,
+)
+from perception.types import (
+    CameraModel,
+    CameraState,
+    GroundTruth,
+    OdometryStep,
+    PoleGeometry,
+    SensorFrame,
+)
 
 STATE = CameraState(
     position=np.array([0.05, 0.0, 0.5]), head_yaw=0.0, head_pitch=0.0, tilt=math.radians(20)
@@ -68,3 +84,55 @@ def test_the_oracle_needs_a_camera() -> None:
     config = PipelineConfig(field_features="oracle")
     with pytest.raises(ValueError, match="camera"):
         PerceptionPipeline(config, PerceptionContext(None, (), PoleGeometry()), [FIELD_FEATURES])
+
+
+def test_a_kidnapped_robot_relocalises_on_the_true_pose_or_its_twin() -> None:
+    """The filter starts 3 m off; the gate refuses every observation until the relocalisation
+    restarts it from one frame's features: at the truth, or at the field's twin of it."""
+    config = PipelineConfig(self_pose="field_features", field_features="oracle")
+    pipeline = PerceptionPipeline(config, context(), outputs=[SELF_POSE])
+    truth = np.array([-1.5, 0.3, 0.1])  # the centre circle and the halfway line in view
+    pipeline.reset(np.array([1.5, -1.5, 2.0]), np.random.default_rng(2))
+    twin = np.array([1.5, -0.3, 0.1 + math.pi])
+    limit = config.relocalisation.after_refused_frames
+    poses = [pipeline.step(frame(k, np.zeros(3), truth))[SELF_POSE].pose for k in range(1, 20)]
+    assert np.hypot(*(poses[limit - 2][:2] - truth[:2])) > 2.0  # still lost before the limit
+    final = poses[-1]
+    off = min(np.hypot(*(final[:2] - p[:2])) for p in (truth, twin))
+    assert off < 0.1
+
+
+def test_a_certain_field_end_mirrors_a_filter_facing_the_other_end() -> None:
+    config = PipelineConfig()
+    provider = FieldFeaturePose(
+        config.sensor_model, config.pose_filter, RelocalisationConfig(), context()
+    )
+    provider.reset(Prior(pose=np.array([1.0, 0.5, math.pi - 0.2]), rng=np.random.default_rng(0)))
+    cov = np.array([[0.04, 0.01, 0.003], [0.01, 0.09, -0.002], [0.003, -0.002, 0.01]])
+    provider.filter.reset(provider.filter.pose, cov)
+    cov_before = provider.filter.cov.copy()
+
+    def belief(certain: int, votes: int) -> FieldEndBelief:
+        return FieldEndBelief(
+            p_away=0.95 if certain == AWAY else 0.5,
+            certain=certain,
+            away_observations=10,
+            home_observations=0,
+            votes=votes,
+            hits=(),
+        )
+
+    still = OdometryStep(delta=np.zeros(3), walk_delta=np.zeros(3))
+    inputs = {ODOMETRY: still, FIELD_FEATURES: (), "camera_state": STATE}
+    # certain, but this frame's own votes do not agree: nothing happens
+    provider.update({**inputs, FIELD_END: belief(AWAY, 0)}, 0.1)
+    np.testing.assert_allclose(provider.filter.pose, [1.0, 0.5, math.pi - 0.2])
+    # certain and agreeing: the camera faces the away (+x) end, the filter said home: mirrored
+    provider.update({**inputs, FIELD_END: belief(AWAY, 3)}, 0.2)
+    np.testing.assert_allclose(provider.filter.pose, [-1.0, -0.5, -0.2], atol=1e-12)
+    # standing still adds no odometry noise: the covariance is the half turn of the old one
+    flip = np.diag([-1.0, -1.0, 1.0])
+    np.testing.assert_allclose(provider.filter.cov, flip @ cov_before @ flip, atol=1e-15)
+    # now facing the end it believes: a second certain frame changes nothing
+    provider.update({**inputs, FIELD_END: belief(AWAY, 3)}, 0.3)
+    np.testing.assert_allclose(provider.filter.pose, [-1.0, -0.5, -0.2], atol=1e-12)

@@ -454,3 +454,34 @@ def test_non_cnn_pipelines_build_no_cnn(monkeypatch: pytest.MonkeyPatch) -> None
         PerceptionPipeline(cfg, context(), outputs=[SELF_POSE, POLE_LAST_SEEN, ODOMETRY_POSE])
     PerceptionPipeline(PipelineConfig(), context(), outputs=[SELF_POSE], emulated=[POLE_SIGHTINGS])
     assert built == []
+
+
+def test_a_provider_reads_a_representation_one_frame_late(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import perception.pipeline as pipeline_module
+    from perception.providers.base import Provider
+
+    class EchoPrevious(Provider):
+        provides = "echo"
+        requires = ()
+        requires_previous = (ODOMETRY_POSE,)
+
+        def update(self, inputs, time_s):  # type: ignore[no-untyped-def]
+            return inputs[pipeline_module.PREVIOUS + ODOMETRY_POSE]
+
+    providers = {**pipeline_module.PROVIDERS, "echo": {"only": lambda c, ctx: EchoPrevious()}}
+    monkeypatch.setattr(pipeline_module, "PROVIDERS", providers)
+    monkeypatch.setattr(
+        pipeline_module, "REPRESENTATIONS", (*pipeline_module.REPRESENTATIONS, "echo")
+    )
+    pipeline = PerceptionPipeline(PipelineConfig(), context(), outputs=["echo"])
+    assert ODOMETRY_POSE in pipeline.representations  # resolved for it, though read late
+    pipeline.reset(np.zeros(3), np.random.default_rng(0))
+    step = np.array([0.1, 0.0, 0.0])
+    first = pipeline.step(SensorFrame(time_s=0.1, odometry_delta=step))
+    assert first["echo"] is None  # nothing before the episode's first frame
+    second = pipeline.step(SensorFrame(time_s=0.2, odometry_delta=step))
+    np.testing.assert_array_equal(second["echo"], first[ODOMETRY_POSE])
+    pipeline.reset(np.zeros(3), np.random.default_rng(0))
+    assert pipeline.step(SensorFrame(time_s=0.1, odometry_delta=step))["echo"] is None

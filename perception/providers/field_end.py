@@ -1,0 +1,130 @@
+"""Which end of the field the robot faces, as a provider: ``field_end``.
+
+:class:`UnknownFieldEnd` (``"none"``) never knows. :class:`NaturalLandmarkFieldEnd`
+(``"bag_of_words"``) runs seed 004's Algorithm 1
+(:class:`perception.landmarks.field_end.FieldEndRecogniser`) on the frame's horizon features,
+less those on detected robots: for the first ``walk_on_s`` seconds of an episode (the walk on
+to the field, when the start pose is known) it stores views facing a goal area with a goal
+post in sight, labelled by the end the camera faces; afterwards every frame facing a goal area
+is recognised. "Facing a goal area" is judged on the previous frame's self pose (the pose
+filter reads this belief, so it runs one frame apart) and the head yaw: the camera's heading
+within ``facing_tolerance_rad`` of +x (the away goal, which our team attacks) or -x (home).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from perception.landmarks.field_end import (
+    AWAY,
+    HOME,
+    FieldEndBelief,
+    FieldEndConfig,
+    FieldEndRecogniser,
+)
+from perception.landmarks.horizon_features import HorizonFeatures
+from perception.landmarks.vocabulary import default_vocabulary
+from perception.providers.base import Provider
+from perception.providers.landmarks import features_off_robots
+from perception.representations import (
+    FIELD_END,
+    FIELD_FEATURES,
+    HORIZON_FEATURES,
+    ROBOT_SIGHTINGS,
+    SELF_POSE,
+    Prior,
+)
+from perception.validation import check_positive
+
+UNKNOWN = FieldEndBelief(
+    p_away=0.5, certain=0, away_observations=0, home_observations=0, votes=0, hits=()
+)
+
+
+@dataclass(frozen=True, kw_only=True)
+class FieldEndProviderConfig:
+    """Algorithm 1's settings, the walk-on's length (s) and how squarely the camera must face
+    a goal area (rad)."""
+
+    recogniser: FieldEndConfig = field(default_factory=FieldEndConfig)
+    walk_on_s: float = 15.0
+    facing_tolerance_rad: float = math.radians(40.0)
+
+    def __post_init__(self) -> None:
+        check_positive("FieldEndProviderConfig", "walk_on_s", self.walk_on_s)
+        check_positive(
+            "FieldEndProviderConfig",
+            "facing_tolerance_rad",
+            self.facing_tolerance_rad,
+            upper=math.pi / 2,
+        )
+
+
+class UnknownFieldEnd(Provider):
+    """No natural landmarks: the belief is always even (P(away) = 0.5, nothing certain)."""
+
+    provides = FIELD_END
+    requires = ()
+
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> FieldEndBelief:
+        return UNKNOWN
+
+
+class NaturalLandmarkFieldEnd(Provider):
+    """Seed 004's natural landmark localisation system (module docstring)."""
+
+    provides = FIELD_END
+    requires = (HORIZON_FEATURES, ROBOT_SIGHTINGS, FIELD_FEATURES)
+    requires_previous = (SELF_POSE,)
+
+    def __init__(self, config: FieldEndProviderConfig) -> None:
+        self.config = config
+        self.vocabulary = default_vocabulary()
+        self._recogniser: FieldEndRecogniser | None = None
+        self._start = np.zeros(3)
+        self._start_s: float | None = None
+
+    def reset(self, prior: Prior) -> None:
+        self._recogniser = FieldEndRecogniser(self.vocabulary, self.config.recogniser, prior.rng)
+        self._start = np.asarray(prior.pose, dtype=np.float64).copy()
+        self._start_s = None
+
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> FieldEndBelief:
+        if self._recogniser is None:
+            raise RuntimeError("NaturalLandmarkFieldEnd.reset() must be called first")
+        if self._start_s is None:
+            self._start_s = time_s
+        seen: HorizonFeatures = features_off_robots(
+            inputs[HORIZON_FEATURES], inputs[ROBOT_SIGHTINGS]
+        )
+        previous = inputs["previous_" + SELF_POSE]
+        heading = (self._start if previous is None else previous.pose)[2] + seen.head_yaw
+        facing = self._facing(heading)
+        words = self.vocabulary.quantise(seen.features.descriptors)
+        x = seen.features.x
+        if time_s - self._start_s < self.config.walk_on_s:
+            post_visible = any(f.kind == "goal_post" for f in inputs[FIELD_FEATURES])
+            self._recogniser.build(
+                words,
+                x,
+                facing if facing else AWAY,
+                facing_goal=facing != 0,
+                post_visible=post_visible,
+            )
+            return UNKNOWN
+        return self._recogniser.observe(words, x, facing_goal=facing != 0)
+
+    def _facing(self, heading: float) -> int:
+        """AWAY when the camera's field heading ``heading`` (rad) points at the +x goal area,
+        HOME at the -x one, else 0."""
+        tolerance = self.config.facing_tolerance_rad
+        if abs(math.remainder(heading, math.tau)) <= tolerance:
+            return AWAY
+        if abs(math.remainder(heading - math.pi, math.tau)) <= tolerance:
+            return HOME
+        return 0

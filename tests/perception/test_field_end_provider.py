@@ -1,0 +1,126 @@
+"""The natural-landmark field end as a provider: views stored while walking on, labelled by
+the end the camera faces, recognised afterwards; and the pipeline feeding it the previous
+frame's pose."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from perception.field.features import FieldFeature
+from perception.landmarks.field_end import AWAY, HOME
+from perception.landmarks.horizon_features import HorizonFeatures
+from perception.landmarks.surf1d import Surf1dFeatures
+from perception.landmarks.vocabulary import default_vocabulary
+from perception.pipeline import PREVIOUS, PerceptionPipeline, PipelineConfig
+from perception.providers.base import PerceptionContext
+from perception.providers.field_end import FieldEndProviderConfig, NaturalLandmarkFieldEnd
+from perception.representations import (
+    FIELD_END,
+    FIELD_FEATURES,
+    HORIZON_FEATURES,
+    ROBOT_SIGHTINGS,
+    SELF_POSE,
+    Prior,
+)
+from perception.types import CameraModel, PoleGeometry, SlamEstimate
+
+WORDS = default_vocabulary().words
+POST = FieldFeature("goal_post", np.array([[2.0, 0.1]]), 1e-4 * np.eye(2)[None])
+
+
+def view(end: int, shift_px: float = 0.0) -> HorizonFeatures:
+    """A goal area's horizon: 40 features on distinct words (one end's words, the other's
+    another set) at spread columns, shifted by ``shift_px``."""
+    usable = np.flatnonzero(~default_vocabulary().stopped)
+    words = usable[:40] if end == AWAY else usable[40:80]
+    n = len(words)
+    x = np.linspace(10.0, 300.0, n) + shift_px
+    features = Surf1dFeatures(
+        index=np.arange(n),
+        x=x,
+        scale=np.ones(n),
+        filter_size=np.full(n, 9),
+        laplacian=np.ones(n, dtype=np.int8),
+        response=np.ones(n),
+        descriptors=WORDS[words],
+    )
+    return HorizonFeatures(features=features, bearings=np.zeros(n), head_yaw=0.0)
+
+
+def estimate(heading: float) -> SlamEstimate:
+    return SlamEstimate(
+        pose=np.array([0.0, 0.0, heading]),
+        pose_cov=np.eye(3) * 0.01,
+        landmark_ids=np.zeros(0, dtype=np.int64),
+        landmarks=np.zeros((0, 2)),
+        landmark_covs=np.zeros((0, 2, 2)),
+    )
+
+
+def test_views_stored_on_the_walk_on_tell_the_ends_apart_later() -> None:
+    config = FieldEndProviderConfig(walk_on_s=2.0)
+    provider = NaturalLandmarkFieldEnd(config)
+    provider.reset(Prior(pose=np.zeros(3), rng=np.random.default_rng(0)))
+    t = 0.0
+    for end, heading in ((AWAY, 0.0), (HOME, math.pi)):  # the walk on: both ends in view
+        for k in range(5):
+            inputs = {
+                HORIZON_FEATURES: view(end, shift_px=2.0 * k),
+                ROBOT_SIGHTINGS: (),
+                FIELD_FEATURES: (POST,),
+                PREVIOUS + SELF_POSE: estimate(heading),
+            }
+            assert provider.update(inputs, t).certain == 0  # building: no belief yet
+            t += 0.1
+    assert len(provider._recogniser.database) >= 2  # type: ignore[union-attr]
+    t = 2.5
+    for end in (AWAY, HOME):
+        for k in range(config.recogniser.window):  # playing: a window of views of one end
+            # the pose believes the robot faces +x whatever it sees: recognition must not care
+            inputs = {
+                HORIZON_FEATURES: view(end, shift_px=5.0 + k % 3),
+                ROBOT_SIGHTINGS: (),
+                FIELD_FEATURES: (),
+                PREVIOUS + SELF_POSE: estimate(0.0),
+            }
+            belief = provider.update(inputs, t)
+            t += 0.1
+        assert belief.certain == end
+        assert (belief.p_away > 0.9) if end == AWAY else (belief.p_away < 0.1)
+
+
+def test_a_camera_facing_the_side_line_is_not_recognised() -> None:
+    provider = NaturalLandmarkFieldEnd(FieldEndProviderConfig(walk_on_s=0.5))
+    provider.reset(Prior(pose=np.zeros(3), rng=np.random.default_rng(0)))
+    inputs = {
+        HORIZON_FEATURES: view(AWAY),
+        ROBOT_SIGHTINGS: (),
+        FIELD_FEATURES: (POST,),
+        PREVIOUS + SELF_POSE: estimate(math.pi / 2),  # facing the side
+    }
+    provider.update(inputs, 0.0)
+    assert len(provider._recogniser.database) == 0  # type: ignore[union-attr]
+    belief = provider.update(inputs, 1.0)
+    assert belief.hits == () and belief.certain == 0
+
+
+def test_the_pipeline_feeds_the_previous_frames_pose() -> None:
+    config = PipelineConfig(
+        self_pose="field_features", field_features="oracle", field_end="bag_of_words"
+    )
+    context = PerceptionContext(CameraModel(), (), PoleGeometry())
+    pipeline = PerceptionPipeline(config, context, outputs=[SELF_POSE])
+    order = pipeline.representations
+    assert order.index(FIELD_END) < order.index(SELF_POSE)  # no cycle: the pose comes late
+    provider = pipeline.provider(FIELD_END)
+    assert provider.requires_previous == (SELF_POSE,)
+
+
+def test_bad_provider_settings_are_refused() -> None:
+    with pytest.raises(ValueError, match="walk_on_s"):
+        FieldEndProviderConfig(walk_on_s=0.0)
+    with pytest.raises(ValueError, match="facing_tolerance_rad"):
+        FieldEndProviderConfig(facing_tolerance_rad=2.0)
