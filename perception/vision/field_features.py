@@ -81,18 +81,18 @@ from perception.vision.field_geometry import (
     merge_segments,
 )
 from perception.vision.field_pixels import (
+    GroundProjection,
     blobs,
     carpet_top,
     cut_ends,
-    ground_covariances,
     ground_extent,
-    ground_points,
     horizon_rows,
     hsv_mask,
     line_runs,
-    pixels_of,
+    masked_median,
     post_feet,
     row_shifted,
+    rows_from,
 )
 
 _OWNER = "FieldFeatureConfig"
@@ -215,21 +215,26 @@ class _Frame:
             )
         self.camera = row_shifted(camera, config.row_offset_px)
         self.state, self.config = state, config
+        self.projection = GroundProjection(self.camera, state)
         hsv = np.asarray(cv2.cvtColor(image, cv2.COLOR_RGB2HSV), dtype=np.uint8)
         self.green = hsv_mask(hsv, config.green_hsv)
-        self.white = hsv_mask(hsv, config.white_hsv)
-        if self.green.any():  # white must also stand out from this frame's carpet
-            carpet_v = float(np.median(hsv[..., 2][self.green]))
-            self.white &= hsv[..., 2] >= (1.0 + config.white_contrast) * carpet_v
+        (h_lo, s_lo, v_lo), white_hi = config.white_hsv
+        if self.green.any():  # white must also stand out from this frame's carpet: V this high
+            carpet_v = masked_median(hsv, 2, self.green)
+            v_lo = max(v_lo, math.ceil((1.0 + config.white_contrast) * carpet_v))
+        if v_lo <= white_hi[2]:
+            self.white = hsv_mask(hsv, ((h_lo, s_lo, v_lo), white_hi))
+        else:
+            self.white = np.zeros_like(self.green)
         columns = np.arange(camera.width, dtype=np.float64)
-        self.horizon = horizon_rows(self.camera, state, columns)
-        rows = np.arange(camera.height)[:, None]
-        self.below = rows >= (self.horizon + config.horizon_margin_px)[None, :]
+        self.horizon = horizon_rows(self.projection, columns)
+        self.below = rows_from(self.horizon + config.horizon_margin_px, camera.height)
+        self.clear = self.green | self.white  # what may lie beyond a line's end
 
     def covariances(self, pixels: FloatArray, points: FloatArray) -> FloatArray:
         """(N, 2, 2) covariance of the ground ``points`` (N, 2) m seen at ``pixels`` (N, 2)."""
         cfg, cam = self.config, self.camera
-        cov = ground_covariances(pixels, cam, self.state, cfg.pixel_std_px)
+        cov = self.projection.covariances(pixels, cfg.pixel_std_px)
         distance = np.hypot(points[:, 0], points[:, 1])
         bad = ~np.isfinite(cov).all(axis=(1, 2))
         if bad.any():  # at or beyond the horizon: the closed form at the image centre
@@ -241,7 +246,7 @@ class _Frame:
 
     def point_covariances(self, points: FloatArray) -> FloatArray:
         """:meth:`covariances` of ground ``points`` (N, 2) at their own (virtual) pixels."""
-        return self.covariances(pixels_of(points, self.camera, self.state), points)
+        return self.covariances(self.projection.pixels_of(points), points)
 
     def segments(
         self, pixels: FloatArray, ground: FloatArray, tol_px: float, min_m: float, max_m: float
@@ -250,8 +255,7 @@ class _Frame:
         of the image points ``pixels`` (N, 2) (on the ground at ``ground`` (N, 2) m), with each
         group's indices."""
         cfg = self.config
-        out = []
-        for line in image_lines(
+        lines = image_lines(
             pixels,
             tol_px=tol_px,
             min_points=cfg.min_line_points,
@@ -260,18 +264,27 @@ class _Frame:
             rho_step_px=cfg.hough_rho_step_px,
             ground=ground,
             split_gap_m=cfg.split_gap_m,
-        ):
-            ends, hit = ground_points(line.ends, self.camera, self.state)
-            if not hit.all() or np.hypot(*(ends[1] - ends[0])) < min_m:
-                continue
-            if np.hypot(ends[:, 0], ends[:, 1]).max() > max_m:
-                continue
-            cut = cut_ends(line.ends, self.green | self.white, cfg.open_border_px) | (
-                np.hypot(ends[:, 0], ends[:, 1]) > cfg.max_range_m - cfg.junction_end_m
+        )
+        if not lines:
+            return []
+        ends_px = np.array([line.ends for line in lines])  # (L, 2, 2)
+        ends, hit = self.projection.points(ends_px.reshape(-1, 2))
+        ends = ends.reshape(-1, 2, 2)
+        distance = np.hypot(ends[..., 0], ends[..., 1])  # (L, 2)
+        length = np.hypot(*(ends[:, 1] - ends[:, 0]).T)
+        ok = hit.reshape(-1, 2).all(axis=1) & (length >= min_m) & (distance.max(axis=1) <= max_m)
+        if not ok.any():
+            return []
+        cut = cut_ends(ends_px[ok], self.clear, cfg.open_border_px) | (
+            distance[ok] > cfg.max_range_m - cfg.junction_end_m
+        )
+        covs = self.covariances(ends_px[ok].reshape(-1, 2), ends[ok].reshape(-1, 2))
+        return [
+            (Segment(e, c, (bool(o[0]), bool(o[1]))), lines[k].indices)
+            for k, e, c, o in zip(
+                np.flatnonzero(ok), ends[ok], covs.reshape(-1, 2, 2, 2), cut, strict=True
             )
-            opens = (bool(cut[0]), bool(cut[1]))
-            out.append((Segment(ends, self.covariances(line.ends, ends), opens), line.indices))
-        return out
+        ]
 
 
 def _on_circle(segment: Segment, centre: FloatArray, radius: float, tol: float) -> bool:
@@ -297,8 +310,7 @@ def detect_field_features(
     runs = line_runs(
         frame.white & frame.below,
         frame.green,
-        frame.camera,
-        state,
+        frame.projection,
         line_width_m=cfg.line_width_m,
         width_factor=cfg.run_width_factor,
         slack_px=cfg.run_slack_px,
@@ -399,21 +411,18 @@ def _marks(
     plus one pixel's footprint) is within ``mark_size_m``; not at the circle's centre (the
     centre mark) nor within ``mark_clearance_m`` of a line (a far line thinner than a pixel is
     drawn broken into such blobs)."""
-    cfg, cam, state = frame.config, frame.camera, frame.state
+    cfg, projection = frame.config, frame.projection
     out = []
     for blob in blobs(
         frame.white & frame.below,
         frame.green,
         min_px=cfg.mark_px[0],
         max_px=cfg.mark_px[1],
+        min_side_px=2,
         ring_px=2,
         green_fraction=cfg.mark_green_fraction,
     ):
-        if (np.ptp(blob.pixels, axis=0) < 1).any():
-            continue
-        points, hit = ground_points(
-            np.vstack([blob.centroid, blob.pixels]).astype(np.float64), cam, state
-        )
+        points, hit = projection.points(np.vstack([blob.centroid, blob.pixels]))
         if not hit.all():
             continue
         centre = points[0]
@@ -423,7 +432,7 @@ def _marks(
             continue
         if any(s.distance(centre) < cfg.mark_clearance_m for s in segments):
             continue
-        extent = ground_extent(blob, points[1:], centre, cam, state)
+        extent = ground_extent(blob, points[1:], centre, projection)
         lo, hi = cfg.mark_size_m
         if (extent >= lo).all() and (extent <= hi).all():
             cov = frame.covariances(blob.centroid[None], centre[None])
@@ -433,12 +442,11 @@ def _marks(
 
 def _posts(frame: _Frame, lines: NDArray[np.bool_]) -> list[FieldFeature]:
     """Goal posts: their feet (:func:`post_feet`) moved a radius along the view."""
-    cfg, cam, state = frame.config, frame.camera, frame.state
+    cfg, projection = frame.config, frame.projection
     feet = post_feet(
         frame.white,
         frame.green | lines,
-        cam,
-        state,
+        projection,
         diameter_m=cfg.post_diameter_m,
         width_ratio=cfg.post_width_ratio,
         min_height_m=(cfg.min_post_height_m, cfg.min_cut_post_height_m),
@@ -447,9 +455,9 @@ def _posts(frame: _Frame, lines: NDArray[np.bool_]) -> list[FieldFeature]:
     if not feet:
         return []
     pixels = np.array(feet)
-    points, hit = ground_points(pixels, cam, state)
+    points, hit = projection.points(pixels)
     pixels, points = pixels[hit], points[hit]
-    view = points - np.asarray(state.position[:2])
+    view = points - projection.position[:2]
     view /= np.maximum(np.hypot(view[:, 0], view[:, 1]), 1e-9)[:, None]
     centres = points + 0.5 * cfg.post_diameter_m * view
     keep = np.hypot(centres[:, 0], centres[:, 1]) <= cfg.max_range_m
@@ -464,12 +472,12 @@ def _field_edges(frame: _Frame, lines: NDArray[np.bool_]) -> list[FieldFeature]:
     """Straight stretches of the carpet's top edge in the image (line pixels count as carpet),
     on the ground."""
     cfg = frame.config
-    top = carpet_top(frame.green | lines, frame.horizon + cfg.horizon_margin_px)
+    top = carpet_top((frame.green | lines) & frame.below)
     columns = np.flatnonzero(np.isfinite(top))
     rows = top[columns]
     pixels = np.column_stack([columns, rows - 0.5]).astype(np.float64)  # the edge between rows
     pixels = pixels[pixels[:, 1] >= frame.horizon[columns] + cfg.horizon_margin_px]
-    ground, hit = ground_points(pixels, frame.camera, frame.state)
+    ground, hit = frame.projection.points(pixels)
     found = frame.segments(
         pixels[hit], ground[hit], cfg.edge_tol_px, cfg.min_edge_m, cfg.edge_max_range_m
     )

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Literal
 
 import numpy as np
@@ -54,16 +55,18 @@ class Segment:
     cov: FloatArray
     open: tuple[bool, bool] = (False, False)
 
-    @property
+    @cached_property
     def length(self) -> float:
         """Length (m)."""
         return float(np.hypot(*(self.ends[1] - self.ends[0])))
 
-    @property
+    @cached_property
     def direction(self) -> FloatArray:
-        """Unit vector (2,) from the first end to the second."""
+        """Unit vector (2,) from the first end to the second (read-only: it is kept)."""
         d = self.ends[1] - self.ends[0]
-        return np.asarray(d / np.hypot(*d), dtype=np.float64)
+        direction = np.asarray(d / np.hypot(*d), dtype=np.float64)
+        direction.flags.writeable = False
+        return direction
 
     def distance(self, point: FloatArray) -> float:
         """Distance (m) from ``point`` (2,) m to the segment."""
@@ -104,7 +107,7 @@ class CircleFound:
 
 def _tls(points: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Centroid (2,) and unit direction (2,) of the total-least-squares line through (K, 2)."""
-    centre = points.mean(axis=0)
+    centre = points.sum(axis=0) / len(points)  # the mean, without its overhead
     _, _, vt = np.linalg.svd(points - centre, full_matrices=False)
     return centre, np.asarray(vt[0], dtype=np.float64)
 
@@ -123,30 +126,36 @@ def image_lines(
 ) -> list[ImageLine]:
     """Collinear groups among the image points ``points`` (N, 2) px.
 
-    Repeatedly: vote every remaining point into a ``(theta, rho)`` accumulator (steps
-    ``theta_step_rad``, ``rho_step_px``), take the peak, refit the points within ``rho_step_px``
-    of it by total least squares and take those within ``tol_px`` of the refit; they leave the
-    pool, are refitted together, and are split where consecutive points along the line lie
-    more than ``split_gap_px`` apart or, given their ground points ``ground`` (N, 2) m, more
-    than ``split_gap_m`` apart on the ground. The pieces of ``min_points`` or more points keep
-    the common line (a far line thinner than a pixel is drawn as a staircase with gaps, whose
-    steps alone would lie askew; a few stray points beyond a line's end are dropped). Stops
-    when the peak has fewer than ``min_points`` votes or after ``max_peaks`` peaks.
+    Repeatedly: take the peak of the ``(theta, rho)`` accumulator (steps ``theta_step_rad``,
+    ``rho_step_px``) of the votes of every remaining point, refit the points within
+    ``rho_step_px`` of it by total least squares and take those within ``tol_px`` of the
+    refit; they leave the pool (taking their votes back), are refitted together, and are split
+    where consecutive points along the line lie more than ``split_gap_px`` apart or, given
+    their ground points ``ground`` (N, 2) m, more than ``split_gap_m`` apart on the ground. The
+    pieces of ``min_points`` or more points keep the common line (a far line thinner than a
+    pixel is drawn as a staircase with gaps, whose steps alone would lie askew; a few stray
+    points beyond a line's end are dropped). Stops when the peak has fewer than ``min_points``
+    votes or after ``max_peaks`` peaks.
     """
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
     thetas = np.arange(0.0, math.pi, theta_step_rad)
     trig = np.vstack([np.cos(thetas), np.sin(thetas)])  # (2, T)
     rho_max = float(np.abs(pts).sum(axis=1).max()) + rho_step_px if len(pts) else 0.0
     n_rho = math.ceil(2 * rho_max / rho_step_px) + 1
-    offsets = n_rho * np.arange(len(thetas))
+    # each point's accumulator cells (N, T); a point leaving the pool takes its votes back
+    cells = pts @ trig
+    cells += rho_max
+    cells /= rho_step_px
+    np.rint(cells, out=cells)
+    cells += n_rho * np.arange(len(thetas), dtype=np.float64)  # exact: small whole numbers
+    bins = cells.astype(np.intp)
+    votes = np.bincount(bins.ravel(), minlength=n_rho * len(thetas))
     remaining = np.arange(len(pts))
     out: list[ImageLine] = []
     for _ in range(max_peaks):
         if len(remaining) < min_points:
             break
         p = pts[remaining]
-        bins = np.rint((p @ trig + rho_max) / rho_step_px).astype(np.intp) + offsets
-        votes = np.bincount(bins.ravel(), minlength=n_rho * len(thetas))
         peak = int(np.argmax(votes))
         if votes[peak] < min_points:
             break
@@ -160,19 +169,23 @@ def image_lines(
             near = np.abs(p @ trig[:, t] - rho) <= rho_step_px
         chosen = remaining[near]
         remaining = remaining[~near]
+        if len(remaining) >= min_points:  # the rest vote again: take these votes back
+            np.subtract.at(votes, bins[chosen].ravel(), 1)
         along = (pts[chosen] - centre) @ direction
         order = np.argsort(along)
         chosen, along = chosen[order], along[order]
         wide = np.diff(along) > split_gap_px
         if ground is not None:
-            wide |= np.hypot(*np.diff(ground[chosen], axis=0).T) > split_gap_m
-        cuts = np.flatnonzero(wide) + 1
+            step = np.diff(ground[chosen], axis=0)
+            wide |= np.hypot(step[:, 0], step[:, 1]) > split_gap_m
+        cuts = (np.flatnonzero(wide) + 1).tolist()
         centre, direction = _tls(pts[chosen])  # one line for all pieces: they merge again
-        for piece in np.split(chosen, cuts):
-            if len(piece) >= min_points:
-                s = (pts[piece] - centre) @ direction
-                ends = np.array([centre + s.min() * direction, centre + s.max() * direction])
-                out.append(ImageLine(piece, ends))
+        s = (pts[chosen] - centre) @ direction
+        for lo, hi in zip([0, *cuts], [*cuts, len(chosen)], strict=True):
+            if hi - lo >= min_points:
+                first, last = s[lo:hi].min(), s[lo:hi].max()
+                ends = np.array([centre + first * direction, centre + last * direction])
+                out.append(ImageLine(chosen[lo:hi], ends))
     return out
 
 
@@ -197,19 +210,24 @@ def curvature(points: FloatArray) -> tuple[float, float]:
     return 2.0 * float(coef[2]), 2.0 * math.sqrt(max(float(var), 0.0))
 
 
-def _overlap_gap(a: Segment, b: Segment) -> tuple[float, float, float]:
-    """Angle (rad, modulo pi) between ``a`` and ``b``, the larger distance (m) of either's
-    ends from the other's line, and the gap (m) between them along ``a`` (negative: overlap)."""
+def _mergeable(
+    a: Segment, b: Segment, angle_tol_rad: float, offset_tol_m: float, gap_tol_m: float
+) -> bool:
+    """Whether ``a`` and ``b`` lie within ``angle_tol_rad`` (modulo pi) of each other, each
+    one's ends within ``offset_tol_m`` of the other's line, and overlap or leave a gap of at
+    most ``gap_tol_m`` between them along ``a`` (each test only when the ones before pass)."""
     da, db = a.direction, b.direction
-    angle = math.acos(min(abs(float(da @ db)), 1.0))
+    if not math.acos(min(abs(float(da @ db)), 1.0)) <= angle_tol_rad:  # (NaN fails)
+        return False
     na, nb = np.array([-da[1], da[0]]), np.array([-db[1], db[0]])
     offset = max(
         float(np.abs((b.ends - a.ends[0]) @ na).max()),
         float(np.abs((a.ends - b.ends[0]) @ nb).max()),
     )
+    if not offset <= offset_tol_m:
+        return False
     sb = (b.ends - a.ends[0]) @ da
-    gap = max(float(sb.min()) - a.length, -float(sb.max()))
-    return angle, offset, gap
+    return max(float(sb.min()) - a.length, -float(sb.max())) <= gap_tol_m
 
 
 def _merge_two(a: Segment, b: Segment) -> Segment:
@@ -244,8 +262,7 @@ def merge_segments(
         merged = False
         for i in range(len(out)):
             for j in range(i + 1, len(out)):
-                angle, offset, gap = _overlap_gap(out[i], out[j])
-                if angle <= angle_tol_rad and offset <= offset_tol_m and gap <= gap_tol_m:
+                if _mergeable(out[i], out[j], angle_tol_rad, offset_tol_m, gap_tol_m):
                     out[i] = _merge_two(out[i], out[j])
                     del out[j]
                     merged = True
@@ -402,13 +419,15 @@ def find_circle(
     ring = radius_m * np.column_stack([np.cos(phi), np.sin(phi)])
     low = pts.min(axis=0) - radius_m - 2 * cell_m
     shape = np.ceil((pts.max(axis=0) + radius_m + 2 * cell_m - low) / cell_m).astype(np.intp) + 1
-    votes_at = ((pts[:, None, :] + ring[None]) - low) / cell_m
-    cells = np.floor(votes_at).astype(np.intp).reshape(-1, 2)
+    votes_at = pts[:, None, :] + ring[None]  # (N, n_angles, 2) m, then in grid cells
+    votes_at -= low
+    votes_at /= cell_m
+    cells = np.floor(votes_at, out=votes_at).astype(np.intp).reshape(-1, 2)
     grid = np.bincount(cells[:, 0] * shape[1] + cells[:, 1], minlength=int(np.prod(shape)))
-    grid = grid.reshape(shape).astype(np.float64)
-    block = sum(
-        np.roll(np.roll(grid, dx, axis=0), dy, axis=1) for dx in (-1, 0, 1) for dy in (-1, 0, 1)
-    )
+    padded = np.zeros((shape[0] + 2, shape[1] + 2))  # no votes beyond the grid
+    padded[1:-1, 1:-1] = grid.reshape(shape)
+    rows = padded[:-2] + padded[1:-1] + padded[2:]
+    block = rows[:, :-2] + rows[:, 1:-1] + rows[:, 2:]  # 3 x 3 block sums (exact: counts)
     best: CircleFound | None = None
     apart = math.ceil(radius_m / cell_m)
     for _ in range(n_peaks):

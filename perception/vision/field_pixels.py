@@ -13,14 +13,20 @@ the plane z = 0, found by turning each pixel's ray with :meth:`CameraState.rotat
   partly covered). A run across a line at up to ~50° from its normal passes; any line is
   crossed that steeply by the row scan or the column scan. The runs' middles lie on the
   line's centre line.
-- :func:`ground_points`, :func:`ground_jacobians`, :func:`ground_covariances`,
-  :func:`pixels_of`: the projection, its derivative by central differences (as in
-  :mod:`perception.vision.ground_point`, in ``(x, y)`` rather than range and bearing) and
-  the projection back into the image; :func:`row_shifted`: a camera model for an image drawn
-  rows higher than the model says (PyBullet's tiny renderer).
+- :class:`GroundProjection` (one per frame; :func:`ground_points`, :func:`ground_covariances`
+  and :func:`pixels_of` make one for a single call): the projection, its derivative by
+  central differences (as in :mod:`perception.vision.ground_point`, in ``(x, y)`` rather
+  than range and bearing) and the projection back into the image; :func:`row_shifted`: a
+  camera model for an image drawn rows higher than the model says (PyBullet's tiny
+  renderer).
 - :func:`cut_ends`: whether an image line's end may go on (image side, an occluder).
 - :func:`carpet_top`: per column, the row that best splits non-carpet above from carpet below
-  (the idea of :mod:`perception.vision.robots`' field boundary, without its envelope).
+  (:func:`best_splits`, which :mod:`perception.vision.robots`' field boundary shares and
+  gives an envelope).
+- Mask helpers: :func:`row_runs` and :func:`run_pixels` (runs of a mask along its rows, the
+  pixels of runs) and :func:`rows_from` (the rows below a per-column limit such as
+  :func:`horizon_rows`), also used by :mod:`perception.vision.robots`; :func:`hsv_mask` and
+  :func:`masked_median` (colour masks and a channel's median over one).
 - :func:`blobs`, :func:`ground_extent`: small white components ringed by green and their
   size on the ground (penalty marks); :func:`post_feet`: the feet of tall, narrow white
   columns standing on the carpet (goal posts).
@@ -35,11 +41,11 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from perception.geometry import FloatArray, pixel_rays, project_points, ray_ground_intersection
+from perception.geometry import FloatArray, project_points
 from perception.types import CameraModel, CameraState
 
 BoolImage = NDArray[np.bool_]
-JACOBIAN_STEP_PX = 0.25  # central-difference step of :func:`ground_jacobians`
+JACOBIAN_STEP_PX = 0.25  # central-difference step of :meth:`GroundProjection.jacobians`
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -69,44 +75,83 @@ def row_shifted(camera: CameraModel, row_offset_px: float) -> CameraModel:
     )
 
 
+class GroundProjection:
+    """Between image points ``(u, v)`` px of ``camera`` and ground points ``(x, y)`` m (robot
+    frame) seen from ``state``, with the rotation and intrinsics worked out once (one frame
+    asks many times)."""
+
+    def __init__(self, camera: CameraModel, state: CameraState) -> None:
+        self.rotation = state.rotation()  # (3, 3) camera to robot
+        self.position = np.asarray(state.position, dtype=np.float64)  # (3,) m
+        self.fx, self.fy, self.cx, self.cy = camera.fx, camera.fy, camera.cx, camera.cy
+
+    def points(self, pixels: FloatArray) -> tuple[FloatArray, BoolImage]:
+        """Ground points (N, 2) m seen at ``pixels`` (N, 2) px, and a (N,) mask of those below
+        the horizon (the others are NaN), by a unit ray's z less than -1e-9."""
+        uv = np.asarray(pixels, dtype=np.float64).reshape(-1, 2)
+        left = (self.cx - uv[:, 0]) / self.fx  # the ray (1, left, up) in the camera frame
+        up = (self.cy - uv[:, 1]) / self.fy
+        (rx, ry, rz), o = self.rotation, self.position
+        down = rz[0] + rz[1] * left + rz[2] * up  # the ray's robot-frame z
+        hit = down < -1e-9 * np.sqrt(1.0 + left * left + up * up)
+        t = -o[2] / np.where(hit, down, np.nan)  # NaN off the ground
+        xy = np.empty((len(uv), 2))
+        xy[:, 0] = o[0] + t * (rx[0] + rx[1] * left + rx[2] * up)
+        xy[:, 1] = o[1] + t * (ry[0] + ry[1] * left + ry[2] * up)
+        return xy, hit
+
+    def jacobians(self, pixels: FloatArray) -> FloatArray:
+        """(N, 2, 2) ``d(x, y)/d(u, v)`` m/px at ``pixels`` (N, 2) by central differences of
+        ``JACOBIAN_STEP_PX``; NaN where a displaced pixel misses the ground."""
+        uv = np.asarray(pixels, dtype=np.float64).reshape(-1, 2)
+        steps = JACOBIAN_STEP_PX * np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
+        xy, _ = self.points((uv[:, None] + steps[None]).reshape(-1, 2))
+        xy = xy.reshape(len(uv), 4, 2)  # +u, +v, -u, -v
+        return np.asarray(
+            np.stack([xy[:, 0] - xy[:, 2], xy[:, 1] - xy[:, 3]], axis=2) / (2 * JACOBIAN_STEP_PX),
+            dtype=np.float64,
+        )
+
+    def covariances(self, pixels: FloatArray, pixel_std_px: float) -> FloatArray:
+        """(N, 2, 2) covariance (m²) of the ground points at ``pixels`` (N, 2) for independent
+        noise of ``pixel_std_px`` on each image axis, to first order; NaN at the horizon."""
+        jac = self.jacobians(pixels)
+        return np.asarray(pixel_std_px**2 * jac @ jac.transpose(0, 2, 1), dtype=np.float64)
+
+    def project(self, points: FloatArray) -> tuple[FloatArray, BoolImage]:
+        """Image points (N, 2) px of robot-frame points (N, 3) m and a (N,) mask of those in
+        front of the camera (the others are NaN)."""
+        cam = (np.asarray(points, dtype=np.float64) - self.position) @ self.rotation
+        return project_points(cam, self.fx, self.fy, self.cx, self.cy)
+
+    def pixels_of(self, points: FloatArray) -> FloatArray:
+        """Image points (N, 2) px of the ground points ``points`` (N, 2) m; NaN behind the
+        camera (pixels outside the image are kept: the pinhole extends beyond it)."""
+        return self.project(np.column_stack([points, np.zeros(len(points))]))[0]
+
+    def depths(self, points: FloatArray) -> FloatArray:
+        """Distance (N,) m along the optical axis of the ground points ``points`` (N, 2) m."""
+        offset = np.column_stack([points, np.zeros(len(points))]) - self.position
+        return np.asarray(offset @ self.rotation[:, 0], dtype=np.float64)
+
+
 def ground_points(
     pixels: FloatArray, camera: CameraModel, state: CameraState
 ) -> tuple[FloatArray, BoolImage]:
-    """Ground points (N, 2) m (robot frame) seen at ``pixels`` (N, 2) px, and a (N,) mask of
-    those below the horizon (the others are NaN)."""
-    rays = pixel_rays(pixels, camera.fx, camera.fy, camera.cx, camera.cy) @ state.rotation().T
-    return ray_ground_intersection(np.asarray(state.position, np.float64), rays)
-
-
-def ground_jacobians(pixels: FloatArray, camera: CameraModel, state: CameraState) -> FloatArray:
-    """(N, 2, 2) ``d(x, y)/d(u, v)`` m/px at ``pixels`` (N, 2) by central differences of
-    ``JACOBIAN_STEP_PX``; NaN where a displaced pixel misses the ground."""
-    uv = np.asarray(pixels, dtype=np.float64).reshape(-1, 2)
-    steps = JACOBIAN_STEP_PX * np.eye(2)
-    shifted = np.concatenate([uv[:, None] + steps[None], uv[:, None] - steps[None]], axis=1)
-    xy, _ = ground_points(shifted.reshape(-1, 2), camera, state)
-    xy = xy.reshape(len(uv), 4, 2)  # +u, +v, -u, -v
-    return np.asarray(
-        np.stack([xy[:, 0] - xy[:, 2], xy[:, 1] - xy[:, 3]], axis=2) / (2 * JACOBIAN_STEP_PX),
-        dtype=np.float64,
-    )
+    """:meth:`GroundProjection.points` of ``pixels`` (N, 2) px."""
+    return GroundProjection(camera, state).points(pixels)
 
 
 def ground_covariances(
     pixels: FloatArray, camera: CameraModel, state: CameraState, pixel_std_px: float
 ) -> FloatArray:
-    """(N, 2, 2) covariance (m²) of the ground points at ``pixels`` (N, 2) for independent
-    noise of ``pixel_std_px`` on each image axis, to first order; NaN at the horizon."""
-    jac = ground_jacobians(pixels, camera, state)
-    return np.asarray(pixel_std_px**2 * jac @ jac.transpose(0, 2, 1), dtype=np.float64)
+    """:meth:`GroundProjection.covariances` at ``pixels`` (N, 2) px."""
+    return GroundProjection(camera, state).covariances(pixels, pixel_std_px)
 
 
 def pixels_of(points: FloatArray, camera: CameraModel, state: CameraState) -> FloatArray:
-    """Image points (N, 2) px of the ground points ``points`` (N, 2) m; NaN behind the camera
-    (pixels outside the image are kept: the pinhole extends beyond it)."""
-    xyz = np.column_stack([points, np.zeros(len(points))]) - state.position
-    uv, _ = project_points(xyz @ state.rotation(), camera.fx, camera.fy, camera.cx, camera.cy)
-    return uv
+    """:meth:`GroundProjection.pixels_of` the ground ``points`` (N, 2) m."""
+    return GroundProjection(camera, state).pixels_of(points)
 
 
 def hsv_mask(hsv: NDArray[np.uint8], bounds: tuple[tuple[int, ...], tuple[int, ...]]) -> BoolImage:
@@ -115,24 +160,38 @@ def hsv_mask(hsv: NDArray[np.uint8], bounds: tuple[tuple[int, ...], tuple[int, .
     return np.asarray(cv2.inRange(hsv, lo, hi), dtype=bool)
 
 
-def _row_runs(mask: BoolImage) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]]:
+def masked_median(image: NDArray[np.uint8], channel: int, mask: BoolImage) -> float:
+    """Median (as :func:`numpy.median`: the mean of the middle two of an even count) of
+    ``channel`` of ``image`` (H, W, C) over the pixels of ``mask`` (H, W), which holds some."""
+    histogram = cv2.calcHist([image], [channel], mask.view(np.uint8), [256], [0, 256])
+    counts = np.cumsum(histogram.ravel())  # float32, exact: at most H * W < 2**24
+    n = int(counts[-1])
+    low, high = np.searchsorted(counts, [(n - 1) // 2, n // 2], side="right")
+    return 0.5 * float(low + high)
+
+
+def row_runs(mask: BoolImage) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]]:
     """Runs of True along each row of ``mask`` (H, W): rows, first columns, end columns
-    (exclusive)."""
-    padded = np.pad(mask, ((0, 0), (1, 1))).astype(np.int8)
-    step = np.diff(padded, axis=1)
-    rows, starts = np.nonzero(step == 1)
-    _, ends = np.nonzero(step == -1)
-    return rows, starts, ends
+    (exclusive), in row-major order."""
+    height, width = mask.shape
+    padded = np.zeros((height + 1, width + 1), dtype=bool)  # False before each row and after all
+    padded[:height, 1:] = mask
+    flat = padded.ravel()
+    changes = np.flatnonzero(flat[1:] != flat[:-1]) + 1  # alternately a run's start and end
+    rows = changes[0::2] // (width + 1)
+    first = rows * (width + 1) + 1  # each run's row's column 0 in ``flat``
+    return rows, changes[0::2] - first, changes[1::2] - first
 
 
-def _beside(green: BoolImage, rows: NDArray[np.intp], cols: NDArray[np.intp], sign: int, gap: int):
-    """Whether ``green`` holds at one of the ``gap`` pixels beyond ``cols`` (in direction
-    ``sign``) on ``rows``; False past the image side."""
-    out = np.zeros(len(rows), dtype=bool)
-    for k in range(1, gap + 1):
-        c = cols + sign * k
-        inside = (c >= 0) & (c < green.shape[1])
-        out[inside] |= green[rows[inside], c[inside]]
+def _beside(
+    padded: BoolImage, rows: NDArray[np.intp], cols: NDArray[np.intp], sign: int, gap: int
+) -> NDArray[np.bool_]:
+    """Whether green holds at one of the ``gap`` pixels beyond ``cols`` (in direction
+    ``sign``) on ``rows``; ``padded`` (H, W + 2 gap) is the green image with ``gap`` columns
+    of False (past the image side) on either side."""
+    out = padded[rows, cols + gap + sign]
+    for k in range(2, gap + 1):
+        out |= padded[rows, cols + gap + sign * k]
     return out
 
 
@@ -149,8 +208,7 @@ class LineRuns:
 def line_runs(
     white: BoolImage,
     green: BoolImage,
-    camera: CameraModel,
-    state: CameraState,
+    projection: GroundProjection,
     *,
     line_width_m: float,
     width_factor: float,
@@ -160,57 +218,88 @@ def line_runs(
 ) -> LineRuns:
     """White runs (along rows, then columns) that a field line can make (module docstring),
     whose middles lie on the ground within ``max_range_m`` of the robot."""
-    pixels, grounds = [], []
-    mask = np.zeros(white.shape, dtype=bool)
-    for transposed in (False, True):
-        w, g = (white.T, green.T) if transposed else (white, green)
-        rows, starts, ends = _row_runs(w)
-        ok = _beside(g, rows, starts, -1, green_gap_px) & _beside(
-            g, rows, ends - 1, 1, green_gap_px
-        )
-        rows, starts, ends = rows[ok], starts[ok], ends[ok]
-        middle = 0.5 * (starts + ends - 1)
-        uv = np.column_stack([rows, middle] if transposed else [middle, rows]).astype(np.float64)
-        xy, hit = ground_points(uv, camera, state)
-        hit &= np.hypot(xy[:, 0], xy[:, 1]) <= max_range_m
-        jac = ground_jacobians(uv[hit], camera, state)
-        along = jac[:, :, 1 if transposed else 0]  # ground step per pixel along the scan
-        limit = width_factor * line_width_m / np.hypot(along[:, 0], along[:, 1]) + slack_px
-        keep = np.flatnonzero(hit)[(ends[hit] - starts[hit]) <= limit]
-        pixels.append(uv[keep])
-        grounds.append(xy[keep])
-        run_mask = np.zeros((w.shape[0], w.shape[1] + 1), dtype=np.int32)
-        np.add.at(run_mask, (rows[keep], starts[keep]), 1)
-        np.add.at(run_mask, (rows[keep], ends[keep]), -1)
-        filled = np.cumsum(run_mask, axis=1)[:, :-1] > 0
-        mask |= filled.T if transposed else filled
-    return LineRuns(np.concatenate(pixels), np.concatenate(grounds), mask)
+    height, width = white.shape
+    rows, starts, ends = _green_ended_runs(white, green, green_gap_px)
+    cols, tops, bottoms = _green_ended_runs(white.T, green.T, green_gap_px)
+    uv = np.concatenate(
+        [
+            np.column_stack([0.5 * (starts + ends - 1), rows]),
+            np.column_stack([cols, 0.5 * (tops + bottoms - 1)]),
+        ]
+    ).astype(np.float64)
+    in_row = np.repeat([True, False], [len(rows), len(cols)])  # runs of the row scan
+    first = np.concatenate([rows * width + starts, tops * width + cols])  # flat pixel index
+    step = np.where(in_row, 1, width)  # on to the run's next pixel
+    run_px = np.concatenate([ends - starts, bottoms - tops])
+    xy, hit = projection.points(uv)
+    hit &= np.hypot(xy[:, 0], xy[:, 1]) <= max_range_m
+    jac = projection.jacobians(uv[hit])
+    along = np.where(in_row[hit, None], jac[:, :, 0], jac[:, :, 1])  # m per pixel on
+    limit = width_factor * line_width_m / np.hypot(along[:, 0], along[:, 1]) + slack_px
+    keep = np.flatnonzero(hit)[run_px[hit] <= limit]
+    mask = np.zeros(height * width, dtype=bool)
+    mask[run_pixels(first[keep], step[keep], run_px[keep])] = True
+    return LineRuns(uv[keep], xy[keep], mask.reshape(height, width))
 
 
-def horizon_rows(camera: CameraModel, state: CameraState, columns: FloatArray) -> FloatArray:
+def _green_ended_runs(
+    white: BoolImage, green: BoolImage, gap: int
+) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]]:
+    """The runs of ``white`` (H, W) along its rows with ``green`` (H, W) within ``gap`` px
+    beyond both ends: rows, first columns and end columns (exclusive)."""
+    rows, starts, ends = row_runs(white)
+    padded = np.zeros((green.shape[0], green.shape[1] + 2 * gap), dtype=bool)
+    padded[:, gap:-gap] = green
+    ok = _beside(padded, rows, starts, -1, gap) & _beside(padded, rows, ends - 1, 1, gap)
+    return rows[ok], starts[ok], ends[ok]
+
+
+def run_pixels(
+    first: NDArray[np.intp], step: NDArray[np.intp] | int, length: NDArray[np.intp]
+) -> NDArray[np.intp]:
+    """Flat image indices of the pixels of runs starting at the flat index ``first`` (R,) and
+    going on ``length`` (R,) pixels ``step`` (R,) (or one for all) apart: 1 along a row, W
+    down a column."""
+    starts = np.cumsum(length) - length
+    within = np.arange(int(length.sum())) - np.repeat(starts, length)
+    steps = np.repeat(step, length) if np.ndim(step) else step
+    return np.asarray(np.repeat(first, length) + within * steps, dtype=np.intp)
+
+
+def horizon_rows(projection: GroundProjection, columns: FloatArray) -> FloatArray:
     """Row (C,) px of the horizon at each of ``columns`` (px); -inf where the camera looks so
     steeply that no row is horizontal."""
-    r = state.rotation()[2]
+    r, p = projection.rotation[2], projection
     if r[2] <= 1e-9:
         return np.full(len(columns), -np.inf)
-    return np.asarray(
-        camera.cy + camera.fy * (r[0] + r[1] * (camera.cx - columns) / camera.fx) / r[2],
-        dtype=np.float64,
-    )
+    return np.asarray(p.cy + p.fy * (r[0] + r[1] * (p.cx - columns) / p.fx) / r[2], np.float64)
 
 
-def carpet_top(carpet: BoolImage, first_row: FloatArray) -> FloatArray:
-    """Per column of ``carpet`` (H, W), the first row of the carpet: the row that maximises the
-    count of carpet less non-carpet pixels from it down, counting no carpet above
-    ``first_row`` (W,) (the horizon); NaN where the carpet reaches the image top or a column
-    shows none."""
-    height = carpet.shape[0]
-    rows = np.arange(height)[:, None]
-    allowed = carpet & (rows >= first_row[None, :])
-    weight = np.where(allowed, 1, -1).astype(np.int32)
-    below = np.cumsum(weight[::-1], axis=0)[::-1]
-    best = np.argmax(below, axis=0)
-    score = below[best, np.arange(carpet.shape[1])]
+def rows_from(first_row: FloatArray, height: int) -> BoolImage:
+    """(H, C) mask of the rows at or below ``first_row`` (C,) (px, any real) in each column."""
+    first = np.clip(np.ceil(first_row), 0, height).astype(np.int16)  # whole rows: the same
+    return np.asarray(np.arange(height, dtype=np.int16)[:, None] >= first[None, :])
+
+
+def best_splits(carpet: BoolImage) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """Per column of ``carpet`` (H, W), the first row that maximises the count of carpet less
+    non-carpet pixels from it down, and that count (W,) each."""
+    height, width = carpet.shape
+    # (W + 1, H + 1) integral image of the columns: carpet above each row, summed over columns
+    summed = cv2.integral(np.ascontiguousarray(carpet.T).view(np.uint8))
+    above = np.diff(summed, axis=0)  # (W, H + 1): carpet of each column above each row
+    below = above[:, -1:] - above[:, :-1]  # (W, H): carpet from each row down ...
+    below *= 2
+    below -= np.arange(height, 0, -1, dtype=below.dtype)  # ... less all pixels from it down
+    best = np.argmax(below, axis=1)
+    return best, below[np.arange(width), best]
+
+
+def carpet_top(carpet: BoolImage) -> FloatArray:
+    """Per column of ``carpet`` (H, W) (none above the horizon), the first row of the carpet:
+    the row that maximises the count of carpet less non-carpet pixels from it down; NaN where
+    the carpet reaches the image top or a column shows none."""
+    best, score = best_splits(carpet)
     return np.where((score > 0) & (best > 0), best, np.nan).astype(np.float64)
 
 
@@ -228,34 +317,37 @@ def blobs(
     *,
     min_px: int,
     max_px: int,
+    min_side_px: int,
     ring_px: int,
     green_fraction: float,
 ) -> list[Blob]:
-    """White 8-connected components of ``min_px`` to ``max_px`` pixels, clear of the image
-    sides, whose ring (their box widened by ``ring_px``, less the white) is at least
-    ``green_fraction`` green."""
-    count, labels, stats, centroids = cv2.connectedComponentsWithStats(
-        white.astype(np.uint8), connectivity=8
+    """White 8-connected components of ``min_px`` to ``max_px`` pixels, at least
+    ``min_side_px`` wide and tall, clear of the image sides, whose ring (their box widened by
+    ``ring_px``, less the white) is at least ``green_fraction`` green."""
+    mask = np.ascontiguousarray(white).view(np.uint8)
+    # BBDT labels as the default algorithm does (raster order), and is faster with stats
+    _, labels, stats, centroids = cv2.connectedComponentsWithStatsWithAlgorithm(
+        mask, 8, cv2.CV_32S, cv2.CCL_BBDT
     )
     height, width = white.shape
+    x, y, w, h, area = stats.T
+    x0, y0, x1, y1 = x - ring_px, y - ring_px, x + w + ring_px, y + h + ring_px
+    sized = (area >= min_px) & (area <= max_px) & (w >= min_side_px) & (h >= min_side_px)
+    sized &= (x0 >= 0) & (y0 >= 0) & (x1 <= width) & (y1 <= height)
+    sized[0] = False  # the background
     out = []
-    for k in range(1, count):
-        x, y, w, h, area = (int(v) for v in stats[k])
-        if not (min_px <= area <= max_px):
+    for k in np.flatnonzero(sized).tolist():
+        ring = ~white[y0[k] : y1[k], x0[k] : x1[k]]
+        if green[y0[k] : y1[k], x0[k] : x1[k]][ring].mean() < green_fraction:
             continue
-        x0, y0, x1, y1 = x - ring_px, y - ring_px, x + w + ring_px, y + h + ring_px
-        if x0 < 0 or y0 < 0 or x1 > width or y1 > height:
-            continue
-        ring = ~white[y0:y1, x0:x1]
-        if green[y0:y1, x0:x1][ring].mean() < green_fraction:
-            continue
-        ys, xs = np.nonzero(labels[y : y + h, x : x + w] == k)
-        out.append(Blob(np.asarray(centroids[k], np.float64), np.column_stack([xs + x, ys + y])))
+        ys, xs = np.nonzero(labels[y[k] : y[k] + h[k], x[k] : x[k] + w[k]] == k)
+        pixels = np.column_stack([xs + x[k], ys + y[k]])
+        out.append(Blob(np.asarray(centroids[k], np.float64), pixels))
     return out
 
 
 def ground_extent(
-    blob: Blob, points: FloatArray, centre: FloatArray, camera: CameraModel, state: CameraState
+    blob: Blob, points: FloatArray, centre: FloatArray, projection: GroundProjection
 ) -> FloatArray:
     """(2,) extent (m) of a ``blob`` on the ground along and across the view to its
     ``centre`` (2,) m: the spread of its pixels' ground ``points`` (K, 2) plus one pixel's
@@ -263,33 +355,33 @@ def ground_extent(
     view = centre / max(float(np.hypot(*centre)), 1e-9)
     axes = np.array([view, [-view[1], view[0]]])
     spread = (points - centre) @ axes.T
-    footprint = np.abs(axes @ ground_jacobians(blob.centroid[None], camera, state)[0]).sum(axis=1)
+    footprint = np.abs(axes @ projection.jacobians(blob.centroid[None])[0]).sum(axis=1)
     return np.asarray(spread.max(axis=0) - spread.min(axis=0) + footprint, dtype=np.float64)
 
 
 def cut_ends(ends_px: FloatArray, clear: BoolImage, border_px: float) -> NDArray[np.bool_]:
-    """Whether each end of an image line ``ends_px`` (2, 2) px is cut (the line may go on):
-    within ``border_px`` of the image side, or something not ``clear`` (carpet or white,
-    (H, W)) lies just beyond it (2 to 6 px on along the line: a robot, the goal's net)."""
+    """Whether each end of the image lines ``ends_px`` (L, 2, 2) px is cut (the line may go
+    on), (L, 2): within ``border_px`` of the image side, or something not ``clear`` (carpet or
+    white, (H, W)) lies just beyond it (2 to 6 px on along the line: a robot, the goal's net)."""
     height, width = clear.shape
-    u, v = ends_px.T
+    u, v = ends_px[..., 0], ends_px[..., 1]
     cut = (u < border_px) | (u > width - 1 - border_px)
     cut |= (v < border_px) | (v > height - 1 - border_px)
-    d = ends_px[1] - ends_px[0]
-    d = d / max(float(np.hypot(*d)), 1e-9)
-    for k, sign in ((0, -1.0), (1, 1.0)):
-        beyond = ends_px[k] + sign * np.arange(2.0, 7.0)[:, None] * d
-        cols, rows = np.rint(beyond).astype(np.intp).T
-        inside = (cols >= 0) & (cols < width) & (rows >= 0) & (rows < height)
-        cut[k] |= bool((~clear[rows[inside], cols[inside]]).any())
-    return np.asarray(cut, dtype=bool)
+    d = ends_px[:, 1] - ends_px[:, 0]
+    d = d / np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9)[:, None]
+    outward = np.stack([-d, d], axis=1)  # (L, 2, 2): from each end away from the other
+    beyond = ends_px[:, :, None] + np.arange(2.0, 7.0)[:, None] * outward[:, :, None]
+    cols, rows = np.rint(beyond).astype(np.intp).transpose(3, 0, 1, 2)  # (L, 2, 5) each
+    inside = (cols >= 0) & (cols < width) & (rows >= 0) & (rows < height)
+    blocked = np.zeros(cols.shape, dtype=bool)
+    blocked[inside] = ~clear[rows[inside], cols[inside]]
+    return np.asarray(cut | blocked.any(axis=2), dtype=bool)
 
 
 def post_feet(
     white: BoolImage,
     ground: BoolImage,
-    camera: CameraModel,
-    state: CameraState,
+    projection: GroundProjection,
     *,
     diameter_m: float,
     width_ratio: tuple[float, float],
@@ -312,21 +404,19 @@ def post_feet(
     grey robot under its wider body).
     """
     height, width = white.shape
-    cols, tops, ends = _row_runs(white.T)
+    cols, tops, ends = row_runs(white.T)
     below = np.zeros(len(cols), dtype=bool)
     for k in (0, 1):
         r = ends + k
         inside = r < height
         below[inside] |= ground[r[inside], cols[inside]]
     cols, tops, bottoms = cols[below], tops[below], ends[below] - 1
-    foot_xy, hit = ground_points(np.column_stack([cols, bottoms + 0.5]), camera, state)
+    foot_xy, hit = projection.points(np.column_stack([cols, bottoms + 0.5]))
     tall = np.zeros(len(cols), dtype=bool)
-    tall[hit] = _tall_enough(foot_xy[hit], tops[hit], min_height_m, camera, state)
+    tall[hit] = _tall_enough(foot_xy[hit], tops[hit], min_height_m, projection)
     cols, tops, bottoms = cols[tall], tops[tall], bottoms[tall]
-    depth = (np.column_stack([foot_xy[tall], np.zeros(len(cols))]) - state.position) @ (
-        state.rotation()[:, 0]
-    )
-    reach = camera.fx * diameter_m / np.maximum(depth, 1e-3)  # a post's width (px) there
+    depth = projection.depths(foot_xy[tall])
+    reach = projection.fx * diameter_m / np.maximum(depth, 1e-3)  # a post's width (px) there
     order = np.lexsort((bottoms, cols))
     cols, tops, bottoms, reach = cols[order], tops[order], bottoms[order], reach[order]
     groups: list[list[int]] = []
@@ -347,16 +437,16 @@ def post_feet(
         ):
             foot -= 1
         pixel = np.array([0.5 * (c0 + c1), foot + 0.5])
-        xy, hit = ground_points(pixel[None], camera, state)
-        if not hit[0] or bottom - foot > _rows_over(xy[0], max_trim_m, camera, state) + 2:
+        xy, hit = projection.points(pixel[None])
+        if not hit[0] or bottom - foot > _rows_over(xy[0], max_trim_m, projection) + 2:
             continue  # standing on a white strip wider than a line: the floor, not the carpet
-        depth_m = float((np.append(xy[0], 0.0) - state.position) @ state.rotation()[:, 0])
+        depth_m = float(projection.depths(xy)[0])
         if depth_m <= 0:
             continue
-        expected = camera.fx * diameter_m / depth_m
+        expected = projection.fx * diameter_m / depth_m
         if not (width_ratio[0] * expected <= c1 - c0 + 1 <= width_ratio[1] * expected):
             continue
-        low = max(int(_row_at(xy[0], min_height_m[1], camera, state)), top)
+        low = max(int(_row_at(xy[0], min_height_m[1], projection)), top)
         side = 2 + (c1 - c0) // 2  # beyond the lean of a post in a pitched camera
         sides = [white[low : foot + 1, c] for c in (c0 - side, c1 + side) if 0 <= c < width]
         if not sides or max(float(s.mean()) for s in sides) > side_white_max:
@@ -365,22 +455,19 @@ def post_feet(
     return feet
 
 
-def _rows_over(point: FloatArray, depth_m: float, camera: CameraModel, state: CameraState) -> float:
+def _rows_over(point: FloatArray, depth_m: float, projection: GroundProjection) -> float:
     """Image rows (px) that the ground from ``point`` (2,) m to ``depth_m`` further from the
     camera spans; inf when the far end lies beyond the horizon."""
-    view = point - state.position[:2]
+    view = point - projection.position[:2]
     far = point + depth_m * view / max(float(np.hypot(*view)), 1e-9)
-    uv = pixels_of(np.array([point, far]), camera, state)
+    uv = projection.pixels_of(np.array([point, far]))
     return float(uv[0, 1] - uv[1, 1]) if np.isfinite(uv).all() else math.inf
 
 
-def _row_at(point: FloatArray, height_m: float, camera: CameraModel, state: CameraState) -> float:
+def _row_at(point: FloatArray, height_m: float, projection: GroundProjection) -> float:
     """Image row (px) of the point ``height_m`` above the ground point ``point`` (2,) m; -inf
     behind the camera."""
-    offset = np.append(point, height_m) - state.position
-    uv, front = project_points(
-        (offset @ state.rotation())[None], camera.fx, camera.fy, camera.cx, camera.cy
-    )
+    uv, front = projection.project(np.append(point, height_m)[None])
     return float(uv[0, 1]) if front[0] else -math.inf
 
 
@@ -388,14 +475,10 @@ def _tall_enough(
     feet: FloatArray,
     tops: NDArray[np.intp],
     height_m: tuple[float, float],
-    camera: CameraModel,
-    state: CameraState,
+    projection: GroundProjection,
 ) -> NDArray[np.bool_]:
     """Whether white runs from rows ``tops`` (N,) down to the ground points ``feet`` (N, 2) m
     reach ``height_m[0]`` above them, or ``height_m[1]`` when they reach the image top."""
     needed = np.where(tops > 0, height_m[0], height_m[1])
-    points = np.column_stack([feet, needed]) - state.position
-    uv, front = project_points(
-        points @ state.rotation(), camera.fx, camera.fy, camera.cx, camera.cy
-    )
+    uv, front = projection.project(np.column_stack([feet, needed]))
     return np.asarray(front & (tops - 0.5 <= np.nan_to_num(uv[:, 1], nan=-np.inf)), dtype=bool)

@@ -88,6 +88,7 @@ from perception.geometry import FloatArray, pixel_rays, project_points, ray_grou
 from perception.types import CameraModel, CameraState, RobotSighting
 from perception.validation import check_in_interval, check_int, check_positive
 from perception.vision.colour_filter import HsvRange, check_hsv_range
+from perception.vision.field_pixels import best_splits, row_runs, rows_from, run_pixels
 from perception.vision.ground_point import ground_point, height_point, range_bearing_cov
 
 """Inclusive ``((h, s, v) low, (h, s, v) high)`` bounds, OpenCV convention (H 0-179)."""
@@ -328,8 +329,14 @@ class RobotDetector:
         self.config = config
         self.camera = camera
         step = config.column_step_px
-        self._columns = np.arange(step // 2, camera.width, step, dtype=np.intp)
+        self._sampled = slice(step // 2, None, step)  # the sampled columns, as a slice ...
+        self._columns = np.arange(camera.width, dtype=np.intp)[self._sampled]  # ... and array
         self._white = tuple(np.array(b, dtype=np.uint8) for b in config.white_hsv)
+        (h_lo, _, v_lo), (h_hi, s_hi, v_hi) = config.green_hsv  # any saturation up to s_hi
+        self._green_hued = (
+            np.array([h_lo, 0, v_lo], np.uint8),
+            np.array([h_hi, s_hi, v_hi], np.uint8),
+        )
         self._rotation_of: CameraState | None = None  # a one-frame cache of the rotation
         self._rotation_value = np.eye(3)
         self._pole = [tuple(np.array(b, dtype=np.uint8) for b in r) for r in config.pole_hsv]
@@ -362,22 +369,16 @@ class RobotDetector:
         cfg = self.config
         height = self.camera.height
         columns = self._columns
-        strip = np.ascontiguousarray(image[:, columns])
+        strip = np.ascontiguousarray(image[:, self._sampled])
         hsv = np.asarray(cv2.cvtColor(strip, cv2.COLOR_RGB2HSV), dtype=np.uint8)
         floor = self._saturation_floor(hsv)
         green = self._carpet_green(hsv, floor)  # (H, C)
         white = np.asarray(cv2.inRange(hsv, *self._white), dtype=bool)
         line_limit, row_distance = self._line_limits(state)
         green |= white & _thin_runs(white, line_limit)  # field lines are carpet here
-        rows = np.arange(height)[:, None]
-        top = self._horizon_rows(state, columns) - cfg.horizon_margin_px
-        green &= rows >= top[None, :]
-        # best split: maximise (green - non-green) over the rows below
-        weight = np.where(green, 1, -1).astype(np.int32)
-        below = np.cumsum(weight[::-1], axis=0)[::-1]
-        best = np.argmax(below, axis=0)
-        has_carpet = below[best, np.arange(len(columns))] > 0
-        raw = np.where(has_carpet, best, height).astype(np.float64)
+        green &= rows_from(self._horizon_rows(state, columns) - cfg.horizon_margin_px, height)
+        best, score = best_splits(green)  # maximise (green - non-green) over the rows below
+        raw = np.where(score > 0, best, height).astype(np.float64)
         if cfg.median_columns > 1 and len(raw) >= cfg.median_columns:
             filtered = median_filter(raw, size=cfg.median_columns, mode="nearest")
         else:
@@ -403,14 +404,17 @@ class RobotDetector:
         """
         cfg = self.config
         (h_lo, s_lo, v_lo), (h_hi, _, _) = cfg.green_hsv
-        lower = hsv[2 * hsv.shape[0] // 3 :].astype(np.float64)
+        lower = hsv[2 * hsv.shape[0] // 3 :]
         hued = (lower[..., 0] >= h_lo) & (lower[..., 0] <= h_hi) & (lower[..., 2] >= v_lo)
         hued &= lower[..., 1] >= cfg.min_green_saturation
-        sat = np.where(hued, lower[..., 1], np.nan)
-        enough = hued.sum(axis=0) >= cfg.min_glare_samples
+        count = hued.sum(axis=0)
+        enough = count >= cfg.min_glare_samples
         median = np.full(hsv.shape[1], np.inf)
-        if enough.any():
-            median[enough] = np.nanmedian(sat[:, enough], axis=0)
+        if enough.any():  # each column's hued saturations first (255: none can sort after it)
+            ranked = np.sort(np.where(hued, lower[..., 1], 255).T[enough], axis=1)
+            n, rows = count[enough], np.arange(int(enough.sum()))
+            middle = ranked[rows, (n - 1) // 2].astype(np.float64) + ranked[rows, n // 2]
+            median[enough] = middle / 2.0  # the middle one, or the mean of the middle two
         floor: FloatArray = np.clip(
             cfg.glare_saturation_ratio * median, cfg.min_green_saturation, s_lo
         )
@@ -419,16 +423,9 @@ class RobotDetector:
     def _carpet_green(self, hsv: NDArray[np.uint8], floor: FloatArray) -> NDArray[np.bool_]:
         """Pixels (H, W) of ``hsv`` (H, W, 3) in ``green_hsv`` with the saturation floor
         ``floor`` (W,) per column instead of its own."""
-        (h_lo, _, v_lo), (h_hi, s_hi, v_hi) = self.config.green_hsv
-        h, s, v = hsv[..., 0], hsv[..., 1], hsv[..., 2]
-        return (
-            (h >= h_lo)
-            & (h <= h_hi)
-            & (v >= v_lo)
-            & (v <= v_hi)
-            & (s <= s_hi)
-            & (s >= floor[None, :])
-        )
+        least = np.ceil(floor).astype(np.uint8)  # whole saturations: s >= floor iff s >= this
+        hued = np.asarray(cv2.inRange(hsv, *self._green_hued), dtype=bool)
+        return hued & (hsv[..., 1] >= least[None, :])
 
     # ----- steps --------------------------------------------------------------------------
     def _line_limits(self, state: CameraState) -> tuple[FloatArray, FloatArray]:
@@ -967,30 +964,24 @@ class RobotDetector:
 def _thin_runs(white: NDArray[np.bool_], limit: FloatArray) -> NDArray[np.bool_]:
     """Which pixels of ``white`` (H, C) lie in a vertical run no longer than ``limit`` (H,)
     px at the run's bottom row."""
-    height = white.shape[0]
-    above = np.vstack([np.zeros((1, white.shape[1]), bool), white[:-1]])
-    run_id = np.cumsum(white & ~above, axis=0) * white  # 1, 2, ... per column; 0 off the runs
-    ids = run_id + np.arange(white.shape[1])[None, :] * (height + 1)
-    flat = ids[white]
-    if not len(flat):
-        return np.zeros_like(white)
-    lengths = np.bincount(flat)
-    bottoms = np.zeros_like(lengths)
-    np.maximum.at(bottoms, flat, np.nonzero(white)[0])
-    thin = np.zeros_like(white)
-    thin[white] = lengths[flat] <= limit[bottoms[flat]]
-    return thin
+    width = white.shape[1]
+    cols, tops, ends = row_runs(white.T)
+    thin = (ends - tops) <= limit[ends - 1]
+    out = np.zeros(white.size, dtype=bool)
+    out[run_pixels(tops[thin] * width + cols[thin], width, (ends - tops)[thin])] = True
+    return out.reshape(white.shape)
 
 
 def _hull_vertices(values: FloatArray, indices: NDArray[np.intp]) -> NDArray[np.intp]:
     """Vertices (subset of ``indices``, increasing) of the greatest convex minorant of the
     points ``(indices, values[indices])``."""
     hull: list[int] = []
+    vals = values.tolist()  # Python floats: the same arithmetic, without numpy scalars
     for k in indices.tolist():
         while len(hull) >= 2:
             a, b = hull[-2], hull[-1]
             # drop b when it lies on or above the chord a-k (not a vertex of the lower hull)
-            if (values[b] - values[a]) * (k - a) >= (values[k] - values[a]) * (b - a):
+            if (vals[b] - vals[a]) * (k - a) >= (vals[k] - vals[a]) * (b - a):
                 hull.pop()
             else:
                 break

@@ -27,7 +27,16 @@ from perception.vision.field_geometry import (
     image_lines,
     merge_segments,
 )
-from perception.vision.field_pixels import ground_covariances, ground_points, pixels_of
+from perception.vision.field_pixels import (
+    best_splits,
+    ground_covariances,
+    ground_points,
+    masked_median,
+    pixels_of,
+    row_runs,
+    rows_from,
+    run_pixels,
+)
 from perception.vision.ground_point import range_bearing_cov
 
 CAMERA = CameraModel()
@@ -145,6 +154,60 @@ def test_ground_covariance_agrees_with_range_bearing_and_grows_with_range() -> N
     # about (d² + h²) / (h f) per pixel along the view (ground_point's docstring)
     h, d = STATE.position[2], ranges[-1] - STATE.position[0]
     assert sizes[-1] == pytest.approx((d**2 + h**2) / (h * CAMERA.fy), rel=0.15)
+
+
+def test_ground_points_agree_with_unit_rays_on_the_ground() -> None:
+    """Every pixel: below the horizon, the ground point of the pixel's unit ray; above it,
+    NaN and not hit."""
+    u, v = np.meshgrid(np.arange(0.0, CAMERA.width, 7.0), np.arange(0.0, CAMERA.height, 5.0))
+    pixels = np.column_stack([u.ravel(), v.ravel()])
+    state = CameraState(position=np.array([0.0, 0.0, 0.5]), head_yaw=0.3, head_pitch=0.05)
+    rays = pixel_rays(pixels, CAMERA.fx, CAMERA.fy, CAMERA.cx, CAMERA.cy) @ state.rotation().T
+    expected, expected_hit = ray_ground_intersection(state.position, rays)
+    points, hit = ground_points(pixels, CAMERA, state)
+    assert expected_hit.any() and not expected_hit.all()
+    np.testing.assert_array_equal(hit, expected_hit)
+    np.testing.assert_allclose(points[hit], expected[hit], rtol=1e-12, atol=1e-12)
+    assert np.isnan(points[~hit]).all()
+
+
+# ----- image helpers -------------------------------------------------------------------------
+
+
+def test_row_runs_and_their_pixels_rebuild_the_mask() -> None:
+    mask = np.random.default_rng(1).random((20, 30)) < 0.4
+    mask[:, 0] = mask[:, -1] = True  # runs at both sides
+    mask[5] = False  # an empty row
+    rows, starts, ends = row_runs(mask)
+    assert (ends > starts).all() and (np.diff(rows) >= 0).all()
+    assert not mask[rows, starts - 1][starts > 0].any()  # each run is whole
+    assert not mask[rows, ends % mask.shape[1]][ends < mask.shape[1]].any()
+    rebuilt = np.zeros(mask.size, dtype=bool)
+    rebuilt[run_pixels(rows * mask.shape[1] + starts, 1, ends - starts)] = True
+    np.testing.assert_array_equal(rebuilt.reshape(mask.shape), mask)
+    cols, tops, bottoms = row_runs(mask.T)  # down the columns
+    rebuilt[:] = False
+    rebuilt[run_pixels(tops * mask.shape[1] + cols, mask.shape[1], bottoms - tops)] = True
+    np.testing.assert_array_equal(rebuilt.reshape(mask.shape), mask)
+
+
+def test_best_splits_maximise_carpet_less_the_rest_below() -> None:
+    carpet = np.random.default_rng(2).random((40, 25)) < 0.6
+    carpet[20:, :10] = True
+    best, score = best_splits(carpet)
+    below = np.cumsum(np.where(carpet, 1, -1)[::-1], axis=0)[::-1]
+    np.testing.assert_array_equal(best, np.argmax(below, axis=0))
+    np.testing.assert_array_equal(score, below.max(axis=0))
+
+
+def test_rows_from_and_masked_median() -> None:
+    first = np.array([-np.inf, -2.5, 0.0, 3.2, 4.0, 9.0, np.inf])
+    np.testing.assert_array_equal(rows_from(first, 6), np.arange(6)[:, None] >= first[None, :])
+    image = np.random.default_rng(3).integers(0, 256, (30, 40, 3), dtype=np.uint8)
+    for size in (1, 2, 7, 10):  # odd and even counts: the middle two are averaged
+        mask = np.zeros((30, 40), dtype=bool)
+        mask.flat[np.random.default_rng(size).choice(mask.size, size, replace=False)] = True
+        assert masked_median(image, 1, mask) == float(np.median(image[..., 1][mask]))
 
 
 # ----- image lines, segments, merging ------------------------------------------------------
