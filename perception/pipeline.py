@@ -137,7 +137,7 @@ PROVIDERS: Mapping[str, Mapping[str, ProviderFactory]] = {
     HORIZON_FEATURES: {"surf1d": lambda c, ctx: HorizonFeatureProvider(c.horizon, ctx)},
     FIELD_END: {
         "none": lambda c, ctx: UnknownFieldEnd(),
-        "bag_of_words": lambda c, ctx: NaturalLandmarkFieldEnd(c.natural_landmarks),
+        "bag_of_words": lambda c, ctx: NaturalLandmarkFieldEnd(c.natural_landmarks, ctx),
     },
     IMAGE_DETECTIONS: {"cnn": lambda c, ctx: CnnDetections(c.cnn, ctx)},
     POLE_SIGHTINGS: {

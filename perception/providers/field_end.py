@@ -8,7 +8,10 @@ to the field, when the start pose is known) it stores views facing a goal area w
 post in sight, labelled by the end the camera faces; afterwards every frame facing a goal area
 is recognised. "Facing a goal area" is judged on the previous frame's self pose (the pose
 filter reads this belief, so it runs one frame apart) and the head yaw: the camera's heading
-within ``facing_tolerance_rad`` of +x (the away goal, which our team attacks) or -x (home).
+within ``facing_tolerance_rad`` of +x (the away goal, which our team attacks) or -x (home),
+and its optical axis meeting the carpet's end edge between the side lines' extensions. Views
+of the side boards are left out: the same side posters show whether the robot faces one end
+or the other, so they would vote for both.
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from perception.geometry import FloatArray
 from perception.landmarks.field_end import (
     AWAY,
     HOME,
@@ -29,7 +33,7 @@ from perception.landmarks.field_end import (
 )
 from perception.landmarks.horizon_features import HorizonFeatures
 from perception.landmarks.vocabulary import default_vocabulary
-from perception.providers.base import Provider
+from perception.providers.base import PerceptionContext, Provider
 from perception.providers.landmarks import features_off_robots
 from perception.representations import (
     FIELD_END,
@@ -82,8 +86,9 @@ class NaturalLandmarkFieldEnd(Provider):
     requires = (HORIZON_FEATURES, ROBOT_SIGHTINGS, FIELD_FEATURES)
     requires_previous = (SELF_POSE,)
 
-    def __init__(self, config: FieldEndProviderConfig) -> None:
+    def __init__(self, config: FieldEndProviderConfig, context: PerceptionContext) -> None:
         self.config = config
+        self.field = context.field
         self.vocabulary = default_vocabulary()
         self._recogniser: FieldEndRecogniser | None = None
         self._start = np.zeros(3)
@@ -103,8 +108,8 @@ class NaturalLandmarkFieldEnd(Provider):
             inputs[HORIZON_FEATURES], inputs[ROBOT_SIGHTINGS]
         )
         previous = inputs["previous_" + SELF_POSE]
-        heading = (self._start if previous is None else previous.pose)[2] + seen.head_yaw
-        facing = self._facing(heading)
+        pose = self._start if previous is None else previous.pose
+        facing = self._facing(pose, pose[2] + seen.head_yaw)
         words = self.vocabulary.quantise(seen.features.descriptors)
         x = seen.features.x
         if time_s - self._start_s < self.config.walk_on_s:
@@ -119,12 +124,16 @@ class NaturalLandmarkFieldEnd(Provider):
             return UNKNOWN
         return self._recogniser.observe(words, x, facing_goal=facing != 0)
 
-    def _facing(self, heading: float) -> int:
-        """AWAY when the camera's field heading ``heading`` (rad) points at the +x goal area,
-        HOME at the -x one, else 0."""
+    def _facing(self, pose: FloatArray, heading: float) -> int:
+        """AWAY when the camera at ``pose`` (3,) (m, m, rad, field frame) with field heading
+        ``heading`` (rad) faces the +x goal area, HOME the -x one, else 0 (module docstring)."""
         tolerance = self.config.facing_tolerance_rad
         if abs(math.remainder(heading, math.tau)) <= tolerance:
-            return AWAY
-        if abs(math.remainder(heading - math.pi, math.tau)) <= tolerance:
-            return HOME
-        return 0
+            end = AWAY
+        elif abs(math.remainder(heading - math.pi, math.tau)) <= tolerance:
+            end = HOME
+        else:
+            return 0
+        edge_x = end * (self.field.half_length_m + self.field.border_strip_m)
+        axis_y = pose[1] + math.tan(heading) * (edge_x - pose[0])
+        return end if abs(axis_y) <= self.field.half_width_m else 0

@@ -28,6 +28,7 @@ from perception.representations import (
 from perception.types import CameraModel, PoleGeometry, SlamEstimate
 
 WORDS = default_vocabulary().words
+CONTEXT = PerceptionContext(CameraModel(), (), PoleGeometry())
 POST = FieldFeature("goal_post", np.array([[2.0, 0.1]]), 1e-4 * np.eye(2)[None])
 
 
@@ -62,7 +63,7 @@ def estimate(heading: float) -> SlamEstimate:
 
 def test_views_stored_on_the_walk_on_tell_the_ends_apart_later() -> None:
     config = FieldEndProviderConfig(walk_on_s=2.0)
-    provider = NaturalLandmarkFieldEnd(config)
+    provider = NaturalLandmarkFieldEnd(config, CONTEXT)
     provider.reset(Prior(pose=np.zeros(3), rng=np.random.default_rng(0)))
     t = 0.0
     for end, heading in ((AWAY, 0.0), (HOME, math.pi)):  # the walk on: both ends in view
@@ -93,7 +94,7 @@ def test_views_stored_on_the_walk_on_tell_the_ends_apart_later() -> None:
 
 
 def test_a_camera_facing_the_side_line_is_not_recognised() -> None:
-    provider = NaturalLandmarkFieldEnd(FieldEndProviderConfig(walk_on_s=0.5))
+    provider = NaturalLandmarkFieldEnd(FieldEndProviderConfig(walk_on_s=0.5), CONTEXT)
     provider.reset(Prior(pose=np.zeros(3), rng=np.random.default_rng(0)))
     inputs = {
         HORIZON_FEATURES: view(AWAY),
@@ -111,8 +112,7 @@ def test_the_pipeline_feeds_the_previous_frames_pose() -> None:
     config = PipelineConfig(
         self_pose="field_features", field_features="oracle", field_end="bag_of_words"
     )
-    context = PerceptionContext(CameraModel(), (), PoleGeometry())
-    pipeline = PerceptionPipeline(config, context, outputs=[SELF_POSE])
+    pipeline = PerceptionPipeline(config, CONTEXT, outputs=[SELF_POSE])
     order = pipeline.representations
     assert order.index(FIELD_END) < order.index(SELF_POSE)  # no cycle: the pose comes late
     provider = pipeline.provider(FIELD_END)
@@ -124,3 +124,18 @@ def test_bad_provider_settings_are_refused() -> None:
         FieldEndProviderConfig(walk_on_s=0.0)
     with pytest.raises(ValueError, match="facing_tolerance_rad"):
         FieldEndProviderConfig(facing_tolerance_rad=2.0)
+
+
+def test_facing_a_goal_area_means_the_optical_axis_meets_the_end_between_the_side_lines() -> None:
+    provider = NaturalLandmarkFieldEnd(FieldEndProviderConfig(), CONTEXT)
+    field = CONTEXT.field
+    edge = field.half_length_m + field.border_strip_m
+    assert provider._facing(np.array([0.0, 0.0, 0.0]), 0.0) == AWAY
+    assert provider._facing(np.array([0.0, 0.0, 0.0]), math.pi) == HOME
+    assert provider._facing(np.array([0.0, 0.0, 0.0]), math.pi / 2) == 0  # the side line
+    # from near the side line, a heading aiming just inside / outside the end's corner
+    y0 = field.half_width_m - 0.2
+    inside = math.atan2(0.1, edge - 1.0)  # meets the edge 0.1 m past y0: inside
+    outside = math.atan2(0.3, edge - 1.0)  # 0.3 m past: beyond the side line's extension
+    assert provider._facing(np.array([1.0, y0, 0.0]), inside) == AWAY
+    assert provider._facing(np.array([1.0, y0, 0.0]), outside) == 0
