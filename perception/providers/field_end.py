@@ -11,7 +11,9 @@ filter reads this belief, so it runs one frame apart) and the head yaw: the came
 within ``facing_tolerance_rad`` of +x (the away goal, which our team attacks) or -x (home),
 and its optical axis meeting the carpet's end edge between the side lines' extensions. Views
 of the side boards are left out: the same side posters show whether the robot faces one end
-or the other, so they would vote for both.
+or the other, so they would vote for both. So are the features on the faced goal (between its
+posts' bearings, from that pose, widened by ``goal_margin_rad``): the two goals look alike,
+and on the horizon band a goal and its net are the largest structure in view.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from perception.geometry import FloatArray
 from perception.landmarks.field_end import (
@@ -58,9 +61,13 @@ class FieldEndProviderConfig:
     recogniser: FieldEndConfig = field(default_factory=FieldEndConfig)
     walk_on_s: float = 15.0
     facing_tolerance_rad: float = math.radians(40.0)
+    goal_margin_rad: float = math.radians(3.0)
 
     def __post_init__(self) -> None:
         check_positive("FieldEndProviderConfig", "walk_on_s", self.walk_on_s)
+        check_positive(
+            "FieldEndProviderConfig", "goal_margin_rad", self.goal_margin_rad, allow_zero=True
+        )
         check_positive(
             "FieldEndProviderConfig",
             "facing_tolerance_rad",
@@ -110,6 +117,8 @@ class NaturalLandmarkFieldEnd(Provider):
         previous = inputs["previous_" + SELF_POSE]
         pose = self._start if previous is None else previous.pose
         facing = self._facing(pose, pose[2] + seen.head_yaw)
+        if facing:
+            seen = seen.without(self._on_goal(seen, pose, facing))
         words = self.vocabulary.quantise(seen.features.descriptors)
         x = seen.features.x
         if time_s - self._start_s < self.config.walk_on_s:
@@ -123,6 +132,21 @@ class NaturalLandmarkFieldEnd(Provider):
             )
             return UNKNOWN
         return self._recogniser.observe(words, x, facing_goal=facing != 0)
+
+    def _on_goal(self, seen: HorizonFeatures, pose: FloatArray, end: int) -> NDArray[np.bool_]:
+        """(N,) bool: the features between the bearings of the ``end`` goal's posts seen from
+        ``pose`` (3,) (field frame), widened by ``goal_margin_rad``."""
+        posts = self.field.goal_posts()[2:] if end == AWAY else self.field.goal_posts()[:2]
+        heading = pose[2] + seen.head_yaw
+        bearings = np.array(
+            [
+                math.remainder(math.atan2(y - pose[1], x - pose[0]) - heading, math.tau)
+                for x, y in posts
+            ]
+        )
+        margin = self.config.goal_margin_rad
+        low, high = bearings.min() - margin, bearings.max() + margin
+        return (seen.bearings >= low) & (seen.bearings <= high)
 
     def _facing(self, pose: FloatArray, heading: float) -> int:
         """AWAY when the camera at ``pose`` (3,) (m, m, rad, field frame) with field heading

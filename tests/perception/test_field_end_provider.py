@@ -48,7 +48,9 @@ def view(end: int, shift_px: float = 0.0) -> HorizonFeatures:
         response=np.ones(n),
         descriptors=WORDS[words],
     )
-    return HorizonFeatures(features=features, bearings=np.zeros(n), head_yaw=0.0)
+    camera = CameraModel()
+    bearings = np.arctan((camera.cx - x) / camera.fx)
+    return HorizonFeatures(features=features, bearings=bearings, head_yaw=0.0)
 
 
 def estimate(heading: float) -> SlamEstimate:
@@ -139,3 +141,14 @@ def test_facing_a_goal_area_means_the_optical_axis_meets_the_end_between_the_sid
     outside = math.atan2(0.3, edge - 1.0)  # 0.3 m past: beyond the side line's extension
     assert provider._facing(np.array([1.0, y0, 0.0]), inside) == AWAY
     assert provider._facing(np.array([1.0, y0, 0.0]), outside) == 0
+
+
+def test_features_on_the_faced_goal_are_left_out() -> None:
+    provider = NaturalLandmarkFieldEnd(FieldEndProviderConfig(goal_margin_rad=0.0), CONTEXT)
+    seen = view(AWAY)
+    pose = np.array([0.0, 0.0, 0.0])
+    on_goal = provider._on_goal(seen, pose, AWAY)
+    post = CONTEXT.field.goal_posts()[3]  # the away goal's left post
+    half = math.atan2(post[1], post[0])  # the posts' bearings from the centre spot: +-half
+    np.testing.assert_array_equal(on_goal, np.abs(seen.bearings) <= half)
+    assert on_goal.any() and not on_goal.all()
