@@ -6,7 +6,8 @@ shipped files are reproducible byte for byte:
 - ``poster_NN.png`` (the ``"classic"`` set): 64 x 64 procedural clutter (stripes, blocks, discs
   and bars of text-like marks on a tinted ground). Mostly horizontal structure: a level camera's
   horizon row crosses few edges on some of them.
-- ``textured_NN.png`` (the ``"textured"`` set): 128 x 128 clutter built to be seen along a row:
+- ``textured_NN.png`` (the ``"textured"`` set, 40 of them): 128 x 128 clutter built to be seen
+  along a row:
   upright bars, blocks and columns of marks of many widths and contrasts, the scale-rich texture
   natural landmarks on the horizon need (seed 004 ch. 3-5; an office or a hall has it).
 """
@@ -22,6 +23,7 @@ import numpy as np
 SIZE_PX = 64
 TEXTURED_SIZE_PX = 128
 N_POSTERS = 12
+N_TEXTURED = 40  # more than the 20 panels: each panel its own (spl_env.scenes.spl_field)
 
 
 def draw_poster(rng: np.random.Generator) -> np.ndarray:
@@ -85,9 +87,9 @@ def main() -> None:
     rng = np.random.default_rng(args.seed)
     for i in range(N_POSTERS):
         cv2.imwrite(str(args.out / f"poster_{i:02d}.png"), draw_poster(rng))
-    for i in range(N_POSTERS):  # after the classic set: its draws stay as they were
+    for i in range(N_TEXTURED):  # after the classic set: its draws stay as they were
         cv2.imwrite(str(args.out / f"textured_{i:02d}.png"), draw_textured_poster(rng))
-    print(f"wrote {2 * N_POSTERS} posters to {args.out}")
+    print(f"wrote {N_POSTERS + N_TEXTURED} posters to {args.out}")
 
 
 if __name__ == "__main__":

@@ -34,12 +34,15 @@ POLE_BAND_RGBA: dict[str, tuple[float, float, float, float]] = {
     "blue": (0.08, 0.30, 0.95, 1.0),
     "green": (0.0, 0.82, 0.52, 1.0),
 }
-# the poster sets of spl_env/assets/make_posters.py: "classic" (the default since the start)
-# and "textured" (upright structure along every row: natural landmarks on the horizon)
+# the poster sets of spl_env/assets/make_posters.py: "classic" (the default since the start;
+# drawn with replacement, 12 for 20 panels) and "textured" (upright structure along every row:
+# natural landmarks on the horizon; 40, drawn without replacement: every panel its own, so that
+# the field's two ends look different, as a real hall's do)
 POSTER_SETS = {
     "classic": tuple(f"poster_{i:02d}.png" for i in range(12)),
-    "textured": tuple(f"textured_{i:02d}.png" for i in range(12)),
+    "textured": tuple(f"textured_{i:02d}.png" for i in range(40)),
 }
+DISTINCT_POSTERS = {"classic": False, "textured": True}
 LINE_THICKNESS_M = 0.002  # painted-line boxes stand this proud of the carpet
 
 
@@ -257,6 +260,7 @@ def _add_boards(
     h = config.board_height_m
     poster_dir = resources.files("spl_env") / "assets" / "posters"
     files = POSTER_SETS[config.poster_set]
+    order = rng.permutation(len(files)) if DISTINCT_POSTERS[config.poster_set] else None
     panel = 0
     posters: dict[str, str] = {}
     for along_x, fixed, span in (
@@ -277,7 +281,10 @@ def _add_boards(
                 [VisualPart(shape="box", size=size, position=(0.0, 0.0, h / 2), rgba=BOARD_RGBA)],
                 base_position=(x, y, 0.0),
             )
-            poster = files[int(rng.integers(len(files)))]
+            if order is not None:
+                poster = files[int(order[panel % len(files)])]
+            else:
+                poster = files[int(rng.integers(len(files)))]
             world.set_texture(name, str(poster_dir / poster))
             posters[name] = poster
             panel += 1

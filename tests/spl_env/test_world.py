@@ -235,6 +235,8 @@ def test_the_scene_names_each_panels_poster_from_the_set_asked_for() -> None:
         painted = scene.bodies.posters
         assert len(painted) > 10 and set(painted.values()) <= set(files)
         assert all(world.body(name) >= 0 for name in painted)
+        if poster_set == "textured":  # every panel its own poster: the two ends differ
+            assert len(set(painted.values())) == len(painted)
         world.close()
     with pytest.raises(ValueError, match="poster_set"):
         SceneConfig(poster_set="plain")
