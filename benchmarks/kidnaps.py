@@ -1,0 +1,145 @@
+"""Seed 004 Table 4's experiment: kidnaps after a walk on to the field; does the robot end on the
+correct end of the (symmetric) field, and how far off?
+
+What: ``SPL/ActiveVision-NoPoles-v1`` (rendered camera, field features, the pose filter, the
+textured posters) with natural landmarks (``perception.field_end="bag_of_words"``, the
+walk-on's length ``--walk-on`` s) and visual heading odometry, walking seed 000's square (2 m)
+with the head on the ``scan`` baseline among four other robots. After the walk on, every
+``--interval`` s the robot is kidnapped: put down at a free pose with any heading, unknown to
+perception (:meth:`spl_env.robots.nao.NaoRobot.place`). At the end of each interval: the
+position error of the believed pose, and whether it lies on the correct end, nearer the true
+pose than its twin through the centre spot (the field's symmetry). The same episodes without
+natural landmarks (``field_end="none"``) beside it: the field features alone relocalise on the
+truth or its twin.
+
+Seeds ``--seed`` .. ``--seed + --episodes - 1`` (100-101 by default: held out), ``--kidnaps``
+per episode (the seed: 10 kidnaps).
+
+    python benchmarks/kidnaps.py                  # ~15 min on 2 cores
+    python benchmarks/kidnaps.py --episodes 1 --kidnaps 3
+
+Writes ``kidnaps.json`` and ``.md`` to ``--out`` (``benchmarks/results``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import torch
+
+import spl_env  # noqa: F401  (registers the env ids)
+from agents.evaluate import load_policy
+from spl_env.envs.core import SplEnv
+
+RESULTS = Path("benchmarks/results")
+VARIANTS = {"natural landmarks": "bag_of_words", "field features alone": "none"}
+
+
+def episode(field_end: str, seed: int, args: argparse.Namespace) -> list[dict[str, Any]]:
+    """One episode's kidnaps: per kidnap the position error (m) and whether the end is right."""
+    steps_per_s = 10  # control steps of 0.1 s
+    total_s = args.walk_on + args.kidnaps * args.interval
+    env = gym.make(
+        "SPL/ActiveVision-NoPoles-v1",
+        episode_s=total_s + 1.0,
+        body_behaviour="square",
+        square_side_m=2.0,
+        **{
+            "perception.field_end": field_end,
+            "perception.natural_landmarks.walk_on_s": args.walk_on,
+            "perception.odometry": "visual",
+        },
+    )
+    core = env.unwrapped
+    if not isinstance(core, SplEnv):
+        raise TypeError(f"kidnaps need an SplEnv, got {type(core).__name__}")
+    policy = load_policy("scan", env.get_wrapper_attr("config"))
+    rng = np.random.default_rng([seed, 7])  # the kidnaps' own draws
+    obs, info = env.reset(seed=seed)
+    results = []
+    kidnap_steps = {
+        int((args.walk_on + k * args.interval) * steps_per_s) for k in range(args.kidnaps)
+    }
+    end_steps = {s + int(args.interval * steps_per_s) for s in kidnap_steps}
+    for step in range(1, int(total_s * steps_per_s) + 1):
+        action, _ = policy.predict(obs, deterministic=True)
+        obs, _, _, _, info = env.step(action)
+        if step in end_steps:
+            truth = info["ground_truth"]["robot_pose"]
+            belief = info["perception"]["pose"]
+            error = float(np.hypot(*(belief[:2] - truth[:2])))
+            twin = float(np.hypot(*(belief[:2] + truth[:2])))
+            results.append(
+                {"error_m": error, "twin_error_m": twin, "correct_end": bool(error < twin)}
+            )
+        if step in kidnap_steps:
+            others = core.robots[1:]
+            core.robots[0].place(core.placement.free_pose(rng, others))
+    env.close()
+    return results
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--episodes", type=int, default=2)
+    parser.add_argument("--seed", type=int, default=100)
+    parser.add_argument("--kidnaps", type=int, default=10)
+    parser.add_argument("--walk-on", type=float, default=45.0, help="walk-on (s)")
+    parser.add_argument("--interval", type=float, default=20.0, help="kidnap to kidnap (s)")
+    parser.add_argument("--out", type=Path, default=RESULTS)
+    args = parser.parse_args()
+    torch.set_num_threads(1)
+    t0 = time.perf_counter()
+    rows: dict[str, Any] = {}
+    for name, field_end in VARIANTS.items():
+        kidnaps = []
+        for k in range(args.episodes):
+            result = episode(field_end, args.seed + k, args)
+            print(name, args.seed + k, json.dumps(result), flush=True)
+            kidnaps += result
+        correct = [r for r in kidnaps if r["correct_end"]]
+        rows[name] = {
+            "kidnaps": len(kidnaps),
+            "correct_end": len(correct),
+            "mean_error_correct_end_m": float(np.mean([r["error_m"] for r in correct]))
+            if correct
+            else math.nan,
+            "median_error_m": float(np.median([r["error_m"] for r in kidnaps])),
+            "all": kidnaps,
+        }
+    result = {
+        "seeds": [args.seed, args.seed + args.episodes - 1],
+        "walk_on_s": args.walk_on,
+        "interval_s": args.interval,
+        "variants": rows,
+        "seconds": time.perf_counter() - t0,
+    }
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "kidnaps.json").write_text(json.dumps(result, indent=1))
+    lines = [
+        f"Kidnaps after a {args.walk_on:.0f} s walk-on, one every {args.interval:.0f} s, "
+        f"seeds {args.seed}-{args.seed + args.episodes - 1} (seed 004 Table 4)",
+        "",
+        "| localisation | correct end | mean error on the correct end (m) | median error (m) |",
+        "|---|---|---|---|",
+        *(
+            f"| {name} | {r['correct_end']} of {r['kidnaps']} | "
+            f"{r['mean_error_correct_end_m']:.3f} | {r['median_error_m']:.3f} |"
+            for name, r in rows.items()
+        ),
+        "",
+        f"Run time {result['seconds']:.0f} s.",
+    ]
+    (args.out / "kidnaps.md").write_text("\n".join(lines) + "\n")
+    print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()
