@@ -114,7 +114,7 @@ def main() -> None:
             "median_error_m": float(np.median([r["error_m"] for r in kidnaps])),
             "all": kidnaps,
         }
-    result = {
+    report = {
         "seeds": [args.seed, args.seed + args.episodes - 1],
         "walk_on_s": args.walk_on,
         "interval_s": args.interval,
@@ -122,7 +122,7 @@ def main() -> None:
         "seconds": time.perf_counter() - t0,
     }
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "kidnaps.json").write_text(json.dumps(result, indent=1))
+    (args.out / "kidnaps.json").write_text(json.dumps(report, indent=1))
     lines = [
         f"Kidnaps after a {args.walk_on:.0f} s walk-on, one every {args.interval:.0f} s, "
         f"seeds {args.seed}-{args.seed + args.episodes - 1} (seed 004 Table 4)",
@@ -135,7 +135,7 @@ def main() -> None:
             for name, r in rows.items()
         ),
         "",
-        f"Run time {result['seconds']:.0f} s.",
+        f"Run time {report['seconds']:.0f} s.",
     ]
     (args.out / "kidnaps.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
