@@ -17,6 +17,7 @@ per episode (the seed: 10 kidnaps).
 
     python benchmarks/kidnaps.py                  # ~15 min on 2 cores
     python benchmarks/kidnaps.py --episodes 1 --kidnaps 3
+    python benchmarks/kidnaps.py --seed 0 --set perception.natural_landmarks.walk_on_s=30
 
 Writes ``kidnaps.json`` and ``.md`` to ``--out`` (``benchmarks/results``).
 """
@@ -55,6 +56,7 @@ def episode(field_end: str, seed: int, args: argparse.Namespace) -> list[dict[st
             "perception.field_end": field_end,
             "perception.natural_landmarks.walk_on_s": args.walk_on,
             "perception.odometry": "visual",
+            **args.set,
         },
     )
     core = env.unwrapped
@@ -94,7 +96,16 @@ def main() -> None:
     parser.add_argument("--walk-on", type=float, default=45.0, help="walk-on (s)")
     parser.add_argument("--interval", type=float, default=20.0, help="kidnap to kidnap (s)")
     parser.add_argument("--out", type=Path, default=RESULTS)
+    parser.add_argument(
+        "--set",
+        type=lambda item: dict([(item.split("=", 1)[0], json.loads(item.split("=", 1)[1]))]),
+        action="append",
+        default=[],
+        metavar="KEY=JSON",
+        help="an env override, e.g. perception.natural_landmarks.recogniser.window=50",
+    )
     args = parser.parse_args()
+    args.set = {key: value for item in args.set for key, value in item.items()}
     torch.set_num_threads(1)
     t0 = time.perf_counter()
     rows: dict[str, Any] = {}
@@ -118,6 +129,7 @@ def main() -> None:
         "seeds": [args.seed, args.seed + args.episodes - 1],
         "walk_on_s": args.walk_on,
         "interval_s": args.interval,
+        "overrides": args.set,
         "variants": rows,
         "seconds": time.perf_counter() - t0,
     }
