@@ -89,7 +89,8 @@ class FieldEndConfig:
 class FieldEndBelief:
     """One frame's belief: ``p_away`` = P(facing the away goal), ``certain`` (+1 away, -1
     home, 0 neither), the window's ``away_observations`` / ``home_observations``, this frame's
-    net ``votes`` and its ``hits`` (empty for a frame not facing a goal area)."""
+    net ``votes``, its ``observation`` (+1 an away one, -1 a home one, 0 none: Algorithm 1's
+    awayGoalObs / homeGoalObs) and its ``hits`` (empty for a frame not facing a goal area)."""
 
     p_away: float
     certain: int
@@ -97,6 +98,7 @@ class FieldEndBelief:
     home_observations: int
     votes: int
     hits: tuple[Hit, ...]
+    observation: int = 0
 
 
 class FieldEndRecogniser:
@@ -160,7 +162,8 @@ class FieldEndRecogniser:
             self._previous = self._previous_label = None
         votes = sum(1 if hit.label == AWAY else -1 for hit in hits)
         consensus = self.config.min_consensus
-        self._window.append((int(votes >= consensus), int(votes <= -consensus)))
+        observation = AWAY if votes >= consensus else HOME if votes <= -consensus else 0
+        self._window.append((int(observation == AWAY), int(observation == HOME)))
         k = sum(away for away, _ in self._window)
         j = sum(home for _, home in self._window)
         p_away = (1 + k) / (2 + k + j)
@@ -176,6 +179,7 @@ class FieldEndRecogniser:
             home_observations=j,
             votes=votes,
             hits=hits,
+            observation=observation,
         )
 
     def _expanded(self, words: ArrayLike, same_label: int | None) -> IntArray:

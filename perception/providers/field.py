@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections import deque
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -35,7 +36,7 @@ from perception.representations import (
     Prior,
 )
 from perception.types import CameraModel, GroundTruth, SlamEstimate
-from perception.validation import check_int
+from perception.validation import check_in_interval, check_int
 from perception.vision.field_features import FieldFeatureConfig, detect_field_features
 
 
@@ -121,29 +122,45 @@ class FieldFeatureHistory(Provider):
 
 @dataclass(frozen=True, kw_only=True)
 class RelocalisationConfig:
-    """When the field-feature pose filter counts itself lost and starts again from one frame:
-    after ``after_refused_frames`` frames in a row whose pose observation the gate refused (a
-    kidnap, a fall, a filter that drifted off), the frame's features are placed from a start
-    per candidate (:class:`perception.field.sensor_model.SensorModelConfig` ``starts=
+    """When the field-feature pose filter starts again.
+
+    Lost: after ``after_refused_frames`` frames in a row whose pose observation the gate
+    refused (a kidnap, a fall, a filter that drifted off), the frame's features are placed from
+    a start per candidate (:class:`perception.field.sensor_model.SensorModelConfig` ``starts=
     "hypotheses"``, ``order="candidates"``) and, when that fixes all three components, the
-    filter restarts there, its covariance the observation's (the share the filter fuses of
-    it: ``PoseFilterConfig.observation_weight``). 0 never relocalises."""
+    filter restarts there, its covariance the observation's (the share the filter fuses of it:
+    ``PoseFilterConfig.observation_weight``). 0 never relocalises.
+
+    Mirrored: the field is symmetric end to end, so the features alone may place the filter on
+    the twin of the true pose. Each natural-landmark observation of the end the camera faces
+    (:attr:`perception.landmarks.field_end.FieldEndBelief.observation`) agrees or disagrees
+    with the end the filter's heading faces; over the last ``end_window_frames`` frames, with
+    ``d`` disagreeing and ``a`` agreeing, the chance the filter is mirrored is the mean of
+    Beta(1 + d, 1 + a), and above ``end_confidence`` the filter is turned through the centre
+    spot and the window cleared. (Seed 004 re-initialises the filter facing the end its belief
+    is certain of; counted in the field frame, as here, the evidence survives the robot turning
+    round within the window.)
+    """
 
     after_refused_frames: int = 8
+    end_window_frames: int = 100
+    end_confidence: float = 0.75
 
     def __post_init__(self) -> None:
-        check_int("RelocalisationConfig", "after_refused_frames", self.after_refused_frames, 0)
+        owner = "RelocalisationConfig"
+        check_int(owner, "after_refused_frames", self.after_refused_frames, 0)
+        check_int(owner, "end_window_frames", self.end_window_frames, 1)
+        check_in_interval(owner, "end_confidence", self.end_confidence, 0.5, 1.0)
 
 
 class FieldFeaturePose(Provider):
     """The robot pose from odometry and field features: one pose-filter prediction per
     odometry increment and one update per frame whose features the sensor model places
     consistently (a refused observation, or a gated one, changes nothing); a relocalisation
-    when lost (:class:`RelocalisationConfig`). The field is symmetric end to end: when the
-    natural landmarks are certain which end the camera faces (``field_end``, seed 004 ch. 4)
-    and this frame's own votes agree, a filter facing the other end is mirrored through the
-    centre spot, ``(x, y, theta) -> (-x, -y, theta + pi)`` (the seed re-initialises it facing
-    that end). The estimate holds no landmarks: the field's map is known."""
+    when lost, and a half turn through the centre spot, ``(x, y, theta) -> (-x, -y, theta +
+    pi)``, when the natural landmarks (``field_end``, seed 004 ch. 4) say it is mirrored
+    (:class:`RelocalisationConfig`). The estimate holds no landmarks: the field's map is
+    known."""
 
     provides = SELF_POSE
     requires = (ODOMETRY, FIELD_FEATURES, FIELD_END, "camera_state")
@@ -162,6 +179,8 @@ class FieldFeaturePose(Provider):
         self.field_map = context.field_map
         self._filter: PoseFilter | None = None
         self._refused = 0  # frames in a row whose observation the gate refused
+        # per frame: +1 the field end seen agrees with the filter's heading, -1 not, 0 no view
+        self._agreement: deque[int] = deque(maxlen=relocalisation.end_window_frames)
 
     @property
     def filter(self) -> PoseFilter:
@@ -173,11 +192,12 @@ class FieldFeaturePose(Provider):
     def reset(self, prior: Prior) -> None:
         self._filter = PoseFilter(self.config, prior.pose)
         self._refused = 0
+        self._agreement.clear()
 
     def update(self, inputs: Mapping[str, Any], time_s: float) -> SlamEstimate:
         pose_filter = self.filter
         pose_filter.predict(inputs[ODOMETRY].delta)
-        self._face_the_recognised_end(inputs[FIELD_END], inputs["camera_state"].head_yaw)
+        self._weigh_the_field_end(inputs[FIELD_END], inputs["camera_state"].head_yaw)
         features = inputs[FIELD_FEATURES]
         if features:
             result = observe_pose(features, pose_filter.pose, self.field_map, self.model)
@@ -194,18 +214,21 @@ class FieldFeaturePose(Provider):
             landmark_covs=np.zeros((0, 2, 2)),
         )
 
-    def _face_the_recognised_end(self, belief: FieldEndBelief, head_yaw: float) -> None:
-        """Mirror the filter through the centre spot when a certain belief, which this frame's
-        votes agree with, says the camera faces the end the filter's heading does not."""
-        votes_agree = belief.votes * belief.certain > 0
-        if belief.certain == 0 or not votes_agree:
-            return
+    def _weigh_the_field_end(self, belief: FieldEndBelief, head_yaw: float) -> None:
+        """Count this frame's field-end observation against the filter's heading; turn the
+        filter through the centre spot when it is likely mirrored (RelocalisationConfig)."""
         pose_filter = self.filter
         x, y, theta = pose_filter.pose
         facing = AWAY if math.cos(theta + head_yaw) > 0 else HOME
-        if facing != belief.certain:
+        self._agreement.append(
+            0 if belief.observation == 0 else (1 if belief.observation == facing else -1)
+        )
+        disagree = sum(1 for a in self._agreement if a < 0)
+        agree = sum(1 for a in self._agreement if a > 0)
+        if (1 + disagree) / (2 + disagree + agree) > self.relocalisation.end_confidence:
             flip = np.diag([-1.0, -1.0, 1.0])  # the half turn about the centre spot
             pose_filter.reset(np.array([-x, -y, theta + math.pi]), flip @ pose_filter.cov @ flip)
+            self._agreement.clear()
 
     def _relocalise(self, features: tuple[FieldFeature, ...]) -> None:
         """Restart the filter where this frame's features alone put the robot, if they fix
@@ -218,3 +241,4 @@ class FieldFeaturePose(Provider):
         information = self.config.observation_weight * observation.information
         pose_filter.reset(observation.pose, np.linalg.inv(information))
         self._refused = 0
+        self._agreement.clear()  # the evidence was about the old pose

@@ -102,37 +102,45 @@ def test_a_kidnapped_robot_relocalises_on_the_true_pose_or_its_twin() -> None:
     assert off < 0.1
 
 
-def test_a_certain_field_end_mirrors_a_filter_facing_the_other_end() -> None:
+def test_field_end_observations_turn_a_mirrored_filter_round() -> None:
+    """The camera sees the away end while the filter's heading faces home: with no agreeing
+    frame, P(mirrored) = (1 + d) / (2 + d) passes 0.75 at the third disagreeing observation."""
     config = PipelineConfig()
-    provider = FieldFeaturePose(
-        config.sensor_model, config.pose_filter, RelocalisationConfig(), context()
-    )
+    relocalisation = RelocalisationConfig(end_window_frames=10, end_confidence=0.75)
+    provider = FieldFeaturePose(config.sensor_model, config.pose_filter, relocalisation, context())
     provider.reset(Prior(pose=np.array([1.0, 0.5, math.pi - 0.2]), rng=np.random.default_rng(0)))
     cov = np.array([[0.04, 0.01, 0.003], [0.01, 0.09, -0.002], [0.003, -0.002, 0.01]])
     provider.filter.reset(provider.filter.pose, cov)
-    cov_before = provider.filter.cov.copy()
 
-    def belief(certain: int, votes: int) -> FieldEndBelief:
+    def belief(observation: int) -> FieldEndBelief:
         return FieldEndBelief(
-            p_away=0.95 if certain == AWAY else 0.5,
-            certain=certain,
-            away_observations=10,
+            p_away=0.5,
+            certain=0,
+            away_observations=0,
             home_observations=0,
-            votes=votes,
+            votes=2 * observation,
             hits=(),
+            observation=observation,
         )
 
     still = OdometryStep(delta=np.zeros(3), walk_delta=np.zeros(3))
     inputs = {ODOMETRY: still, FIELD_FEATURES: (), "camera_state": STATE}
-    # certain, but this frame's own votes do not agree: nothing happens
-    provider.update({**inputs, FIELD_END: belief(AWAY, 0)}, 0.1)
-    np.testing.assert_allclose(provider.filter.pose, [1.0, 0.5, math.pi - 0.2])
-    # certain and agreeing: the camera faces the away (+x) end, the filter said home: mirrored
-    provider.update({**inputs, FIELD_END: belief(AWAY, 3)}, 0.2)
+    for k, observation in enumerate((AWAY, 0, AWAY)):  # two disagreeing views, one frame none
+        provider.update({**inputs, FIELD_END: belief(observation)}, 0.1 * k)
+        np.testing.assert_allclose(provider.filter.pose, [1.0, 0.5, math.pi - 0.2])
+    provider.update({**inputs, FIELD_END: belief(AWAY)}, 0.3)
     np.testing.assert_allclose(provider.filter.pose, [-1.0, -0.5, -0.2], atol=1e-12)
     # standing still adds no odometry noise: the covariance is the half turn of the old one
     flip = np.diag([-1.0, -1.0, 1.0])
-    np.testing.assert_allclose(provider.filter.cov, flip @ cov_before @ flip, atol=1e-15)
-    # now facing the end it believes: a second certain frame changes nothing
-    provider.update({**inputs, FIELD_END: belief(AWAY, 3)}, 0.3)
+    np.testing.assert_allclose(provider.filter.cov, flip @ cov @ flip, atol=1e-15)
+    # now the views agree with the heading: nothing more happens
+    for k in range(5):
+        provider.update({**inputs, FIELD_END: belief(AWAY)}, 0.4 + 0.1 * k)
     np.testing.assert_allclose(provider.filter.pose, [-1.0, -0.5, -0.2], atol=1e-12)
+
+
+def test_bad_relocalisation_settings_are_refused() -> None:
+    with pytest.raises(ValueError, match="end_confidence"):
+        RelocalisationConfig(end_confidence=0.4)
+    with pytest.raises((ValueError, TypeError), match="end_window_frames"):
+        RelocalisationConfig(end_window_frames=0)
