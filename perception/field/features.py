@@ -135,6 +135,27 @@ class FieldFeature:
         if self.direction is not None:
             object.__setattr__(self, "direction", float(self.direction))
 
+    @classmethod
+    def trusted(
+        cls,
+        kind: FeatureKind,
+        points: FloatArray,
+        cov: FloatArray,
+        direction: float | None = None,
+        direction_std: float = math.nan,
+    ) -> FieldFeature:
+        """A feature from fields its caller built and knows valid (a detector's own finite
+        (P, 2) ``points`` and covariances ``cov`` (P, 2, 2)), stored as construction would
+        store them (float64 copies, ``direction`` as a float) without checking them again:
+        the fast path of :mod:`perception.vision.field_features`; other code constructs."""
+        feature = object.__new__(cls)
+        object.__setattr__(feature, "kind", kind)
+        object.__setattr__(feature, "points", np.array(points, dtype=np.float64))
+        object.__setattr__(feature, "cov", np.array(cov, dtype=np.float64))
+        object.__setattr__(feature, "direction", None if direction is None else float(direction))
+        object.__setattr__(feature, "direction_std", direction_std)
+        return feature
+
     @property
     def distance_m(self) -> float:
         """Distance (m) from the robot origin to the feature's nearest point (a segment's

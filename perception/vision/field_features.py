@@ -348,7 +348,7 @@ def detect_field_features(
         gap_tol_m=cfg.merge_gap_m,
     )
     segments = [s for s in segments if s.length >= cfg.min_line_m]
-    features = [FieldFeature("line", s.ends, s.cov) for s in segments]
+    features = [FieldFeature.trusted("line", s.ends, s.cov) for s in segments]
     features += _field_edges(frame, runs.mask)
     junctions = find_junctions(
         segments,
@@ -359,7 +359,7 @@ def detect_field_features(
     if junctions:
         covs = frame.point_covariances(np.array([j.point for j in junctions]))
         features += [
-            FieldFeature(j.kind, j.point[None], c[None], j.direction, j.direction_std)
+            FieldFeature.trusted(j.kind, j.point[None], c[None], j.direction, j.direction_std)
             for j, c in zip(junctions, covs, strict=True)
         ]
     centre = None if circle is None else circle.centre
@@ -385,19 +385,19 @@ def _circle_features(
         <= cfg.centre_line_m
     ]
     if not through:
-        return [FieldFeature("centre_circle", centre[None], cov)]
+        return [FieldFeature.trusted("centre_circle", centre[None], cov)]
     line = max(through, key=lambda s: s.length)
     d = line.direction
     angle = math.atan2(d[1], d[0]) % math.pi
     std = max(line.normal_std() * math.sqrt(2) / line.length, cfg.min_direction_std_rad)
-    out = [FieldFeature("centre_circle", centre[None], cov, angle, std)]
+    out = [FieldFeature.trusted("centre_circle", centre[None], cov, angle, std)]
     crossings = np.array([centre + sign * cfg.circle_radius_m * d for sign in (-1.0, 1.0)])
     along = (crossings - line.ends[0]) @ d
     seen = (along >= -cfg.junction_end_m) & (along <= line.length + cfg.junction_end_m)
     if seen.any():
         covs = frame.point_covariances(crossings[seen])
         out += [
-            FieldFeature("x_junction", p[None], c[None], angle, std)
+            FieldFeature.trusted("x_junction", p[None], c[None], angle, std)
             for p, c in zip(crossings[seen], covs, strict=True)
         ]
     return out
@@ -436,7 +436,7 @@ def _marks(
         lo, hi = cfg.mark_size_m
         if (extent >= lo).all() and (extent <= hi).all():
             cov = frame.covariances(blob.centroid[None], centre[None])
-            out.append(FieldFeature("penalty_mark", centre[None], cov))
+            out.append(FieldFeature.trusted("penalty_mark", centre[None], cov))
     return out
 
 
@@ -463,7 +463,7 @@ def _posts(frame: _Frame, lines: NDArray[np.bool_]) -> list[FieldFeature]:
     keep = np.hypot(centres[:, 0], centres[:, 1]) <= cfg.max_range_m
     covs = frame.covariances(pixels[keep], centres[keep])
     return [
-        FieldFeature("goal_post", p[None], c[None])
+        FieldFeature.trusted("goal_post", p[None], c[None])
         for p, c in zip(centres[keep], covs, strict=True)
     ]
 
@@ -487,4 +487,4 @@ def _field_edges(frame: _Frame, lines: NDArray[np.bool_]) -> list[FieldFeature]:
         offset_tol_m=cfg.merge_offset_m,
         gap_tol_m=cfg.merge_gap_m,
     )
-    return [FieldFeature("field_edge", s.ends, s.cov) for s in merged]
+    return [FieldFeature.trusted("field_edge", s.ends, s.cov) for s in merged]

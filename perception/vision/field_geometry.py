@@ -199,15 +199,15 @@ def curvature(points: FloatArray) -> tuple[float, float]:
     t = (points - centre) @ direction
     s = (points - centre) @ np.array([-direction[1], direction[0]])
     design = np.column_stack([np.ones_like(t), t, t**2])
-    coef, *_ = np.linalg.lstsq(design, s, rcond=None)
-    residual = s - design @ coef
-    dof = max(len(points) - 3, 1)
-    sigma2 = float(residual @ residual) / dof
-    try:
-        var = sigma2 * np.linalg.inv(design.T @ design)[2, 2]
+    try:  # the normal equations: 3 x 3, well conditioned for ground points near the robot
+        inverse = np.linalg.inv(design.T @ design)
     except np.linalg.LinAlgError:
         return 0.0, math.inf
-    return 2.0 * float(coef[2]), 2.0 * math.sqrt(max(float(var), 0.0))
+    coef = inverse @ (design.T @ s)
+    residual = s - design @ coef
+    dof = max(len(points) - 3, 1)
+    var = float(residual @ residual) / dof * inverse[2, 2]
+    return 2.0 * float(coef[2]), 2.0 * math.sqrt(max(var, 0.0))
 
 
 def _mergeable(
@@ -352,9 +352,15 @@ def _fixed_radius_centre(points: FloatArray, centre: FloatArray, radius: float) 
         diff = points - c
         dist = np.maximum(np.hypot(diff[:, 0], diff[:, 1]), 1e-9)
         jac = -diff / dist[:, None]
-        step = np.linalg.lstsq(jac, -(dist - radius), rcond=None)[0]
+        # the 2 x 2 normal equations J'J step = -J'r, solved by Cramer's rule
+        (a, b), (_, d) = (jac.T @ jac).tolist()
+        g0, g1 = (jac.T @ (radius - dist)).tolist()
+        det = a * d - b * b
+        if not det > 0.0:  # the points lie on one line through the centre: no fix across it
+            break
+        step = np.array([(d * g0 - b * g1) / det, (a * g1 - b * g0) / det])
         c += step
-        if float(np.hypot(*step)) < 1e-6:
+        if math.hypot(step[0], step[1]) < 1e-6:
             break
     return c
 

@@ -119,6 +119,19 @@ def test_directions_are_required_or_refused_by_kind() -> None:
     assert circle.direction is None
 
 
+def test_a_trusted_feature_is_stored_as_a_constructed_one() -> None:
+    points, cov = np.array([[1.0, 0.5]]), np.eye(2)[None] * 1e-4
+    built = FieldFeature("corner", points, cov, np.float64(0.3), 0.1)
+    trusted = FieldFeature.trusted("corner", points, cov, np.float64(0.3), 0.1)
+    for name in ("kind", "direction", "direction_std"):
+        assert getattr(trusted, name) == getattr(built, name)
+        assert type(getattr(trusted, name)) is type(getattr(built, name))
+    for name in ("points", "cov"):
+        assert np.array_equal(getattr(trusted, name), getattr(built, name))
+        assert getattr(trusted, name) is not locals()[name]  # a copy, as construction makes
+    assert FieldFeature.trusted("goal_post", points, cov).direction is None
+
+
 def test_a_lines_distance_is_to_its_nearest_point() -> None:
     line = FieldFeature("line", [[1.0, -2.0], [1.0, 2.0]], np.array([np.eye(2)] * 2) * 1e-4)
     assert line.distance_m == pytest.approx(1.0)
