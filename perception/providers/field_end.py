@@ -13,7 +13,9 @@ and its optical axis meeting the carpet's end edge between the side lines' exten
 of the side boards are left out: the same side posters show whether the robot faces one end
 or the other, so they would vote for both. So are the features on the faced goal (between its
 posts' bearings, from that pose, widened by ``goal_margin_rad``): the two goals look alike,
-and on the horizon band a goal and its net are the largest structure in view.
+and on the horizon band a goal and its net are the largest structure in view; and those on
+the side boards at the view's edges (a ray that does not meet the faced end's edge within the
+carpet's width), which a view of the other end from the same side shares.
 """
 
 from __future__ import annotations
@@ -118,7 +120,9 @@ class NaturalLandmarkFieldEnd(Provider):
         pose = self._start if previous is None else previous.pose
         facing = self._facing(pose, pose[2] + seen.head_yaw)
         if facing:
-            seen = seen.without(self._on_goal(seen, pose, facing))
+            seen = seen.without(
+                self._on_goal(seen, pose, facing) | ~self._on_end(seen, pose, facing)
+            )
         words = self.vocabulary.quantise(seen.features.descriptors)
         x = seen.features.x
         if time_s - self._start_s < self.config.walk_on_s:
@@ -147,6 +151,17 @@ class NaturalLandmarkFieldEnd(Provider):
         margin = self.config.goal_margin_rad
         low, high = bearings.min() - margin, bearings.max() + margin
         return (seen.bearings >= low) & (seen.bearings <= high)
+
+    def _on_end(self, seen: HorizonFeatures, pose: FloatArray, end: int) -> NDArray[np.bool_]:
+        """(N,) bool: the features whose ray from ``pose`` (3,) (field frame) meets the
+        ``end``'s carpet edge within the carpet's width: on that end's boards, not a side's."""
+        field = self.field
+        rays = pose[2] + seen.head_yaw + seen.bearings
+        towards = np.cos(rays) * end > 1e-9
+        edge_x = end * (field.half_length_m + field.border_strip_m)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            y_hit = pose[1] + np.tan(rays) * (edge_x - pose[0])
+        return towards & (np.abs(y_hit) <= field.half_width_m + field.border_strip_m)
 
     def _facing(self, pose: FloatArray, heading: float) -> int:
         """AWAY when the camera at ``pose`` (3,) (m, m, rad, field frame) with field heading

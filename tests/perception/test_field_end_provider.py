@@ -152,3 +152,17 @@ def test_features_on_the_faced_goal_are_left_out() -> None:
     half = math.atan2(post[1], post[0])  # the posts' bearings from the centre spot: +-half
     np.testing.assert_array_equal(on_goal, np.abs(seen.bearings) <= half)
     assert on_goal.any() and not on_goal.all()
+
+
+def test_only_features_on_the_faced_ends_boards_are_kept() -> None:
+    provider = NaturalLandmarkFieldEnd(FieldEndProviderConfig(), CONTEXT)
+    field = CONTEXT.field
+    edge = field.half_length_m + field.border_strip_m
+    half_width = field.half_width_m + field.border_strip_m
+    seen = view(AWAY)
+    pose = np.array([edge - 5.0, 3.0, 0.0])  # 5 m from the end, near the left side line
+    on_end = provider._on_end(seen, pose, AWAY)
+    y_hit = 3.0 + 5.0 * np.tan(seen.bearings)  # rays to the left leave past the corner
+    np.testing.assert_array_equal(on_end, np.abs(y_hit) <= half_width)
+    assert on_end.any() and not on_end.all()
+    assert not provider._on_end(seen, pose, HOME).any()  # facing away, nothing on home's boards
