@@ -16,7 +16,7 @@ ranges at that noise.
 Usage (the dataset from ``python -m spl_env.datasets --out data/poles_val --images 1000
 --seed 1``)::
 
-    python benchmarks/pole_edges.py --data data/poles_val
+    python -m benchmarks.pole_edges --data data/poles_val
 
 Writes ``--out`` (default ``benchmarks/results/pole_edges.json``).
 """
