@@ -136,6 +136,15 @@ def check_bool(owner: str, name: str, value: object) -> None:
         raise InvalidTypeError(f"{_label(owner, name)} must be a bool, got {_got(value)}")
 
 
+def check_generator(name: str, value: object) -> None:
+    """InvalidTypeError unless ``value`` (the argument ``name``) is a numpy Generator: every
+    random draw comes from one the caller seeded."""
+    if not isinstance(value, np.random.Generator):
+        raise InvalidTypeError(
+            f"{name} must be a numpy.random.Generator, got {type(value).__name__}"
+        )
+
+
 def check_choice(
     owner: str, name: str, value: object, choices: Sequence[str], *, optional: bool = False
 ) -> None:

@@ -37,8 +37,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from perception.geometry import FloatArray
 from perception.landmarks.matching import LineModel, Matches, RansacConfig, ransac_line
-from perception.landmarks.vocabulary import Vocabulary, _check_rng
-from perception.validation import InvalidTypeError, check_in_interval, check_int
+from perception.landmarks.vocabulary import Vocabulary
+from perception.validation import InvalidTypeError, check_generator, check_in_interval, check_int
 
 IntArray = NDArray[np.int64]
 
@@ -217,7 +217,7 @@ class ImageDatabase:
         """The hits (at most ``max_results``, best cosine first; ties: lower index) for a frame
         with features' words (N,) and columns ``x`` (N,) (px), querying the count vector
         ``counts`` (K,) (default ``word_counts(words)``). RANSAC draws from ``rng``."""
-        _check_rng(rng)
+        check_generator("rng", rng)
         ids, columns = self._features(words, x)
         vector = word_counts(ids, self.vocabulary) if counts is None else self._counts(counts)
         images, cosine = self.cosines(vector)

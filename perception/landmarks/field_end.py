@@ -46,8 +46,14 @@ from perception.landmarks.bag_of_words import (
     RetrievalConfig,
     word_counts,
 )
-from perception.landmarks.vocabulary import Vocabulary, _check_rng
-from perception.validation import InvalidTypeError, check_bool, check_in_interval, check_int
+from perception.landmarks.vocabulary import Vocabulary
+from perception.validation import (
+    InvalidTypeError,
+    check_bool,
+    check_generator,
+    check_in_interval,
+    check_int,
+)
 
 AWAY = 1  # label of views facing the away goal (the opponents')
 HOME = -1  # label of views facing the home goal
@@ -109,7 +115,7 @@ class FieldEndRecogniser:
     ) -> None:
         if not isinstance(config, FieldEndConfig):
             raise InvalidTypeError(f"config must be a FieldEndConfig, got {type(config).__name__}")
-        _check_rng(rng)
+        check_generator("rng", rng)
         self.config = config
         self.rng = rng
         self.database = ImageDatabase(vocabulary, config.retrieval)

@@ -27,8 +27,8 @@ from numpy.typing import NDArray
 from perception.geometry import FloatArray
 from perception.landmarks.surf1d import Surf1dFeatures
 from perception.validation import (
-    InvalidTypeError,
     check_bool,
+    check_generator,
     check_in_interval,
     check_int,
     check_positive,
@@ -153,8 +153,7 @@ def match_features(test: Surf1dFeatures, stored: Surf1dFeatures, config: Matchin
 
 def ransac_line(matches: Matches, config: RansacConfig, rng: np.random.Generator) -> RansacResult:
     """Fit eq. 8 to ``matches`` by RANSAC (module docstring) with draws from ``rng``."""
-    if not isinstance(rng, np.random.Generator):
-        raise InvalidTypeError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
+    check_generator("rng", rng)
     m = len(matches)
     xs, xt = matches.stored_x, matches.test_x
     if m < config.min_inliers:

@@ -43,6 +43,7 @@ from perception.geometry import FloatArray
 from perception.validation import (
     InvalidTypeError,
     check_choice,
+    check_generator,
     check_in_interval,
     check_int,
 )
@@ -138,7 +139,7 @@ def learn_vocabulary(
     check_choice("learn_vocabulary", "init", init, INITIALISATIONS)
     check_int("learn_vocabulary", "iterations", iterations, 0)
     check_int("learn_vocabulary", "subset_size", subset_size, k, optional=True)
-    _check_rng(rng)
+    check_generator("rng", rng)
     if len(points) < k:
         raise ValueError(f"learn_vocabulary needs at least k={k} descriptors, got {len(points)}")
     if init == "random":
@@ -256,9 +257,3 @@ def _finite_matrix(value: ArrayLike, name: str, columns: int | None = None) -> F
         rows = np.flatnonzero(~np.isfinite(matrix).all(axis=1)).tolist()
         raise ValueError(f"{name} must be finite, got NaN or infinity in rows {rows}")
     return matrix
-
-
-def _check_rng(rng: object) -> None:
-    """Raise unless ``rng`` is a numpy Generator."""
-    if not isinstance(rng, np.random.Generator):
-        raise InvalidTypeError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")

@@ -16,6 +16,7 @@ from perception.validation import (
     check_choice,
     check_covariance,
     check_finite,
+    check_generator,
     check_in_interval,
     check_int,
     check_positive,
@@ -245,3 +246,10 @@ def test_check_covariance_rejects_what_is_not_one(size: int) -> None:
             check_covariance(matrix, "C", size)
     with pytest.raises(TypeError, match=rf"^C must be a \({size}, {size}\) array, got 'x'$"):
         check_covariance("x", "C", size)
+
+
+def test_check_generator_takes_only_a_numpy_generator() -> None:
+    check_generator("rng", np.random.default_rng(0))
+    for bad in (np.random.RandomState(0), 0, None):
+        with pytest.raises(InvalidTypeError, match=r"rng must be a numpy\.random\.Generator"):
+            check_generator("rng", bad)
