@@ -169,6 +169,12 @@ class DetectorModel:
         for name, stds in directions.items():
             object.__setattr__(self, name, stds)
 
+    def __hash__(self) -> int:
+        """A hash of the values (the mappings are dicts, which do not hash): configs holding a
+        model stay hashable, as every env config is."""
+        mappings = ("recall", "point_std_m", "direction_std_rad", "reported_direction_std_rad")
+        return hash((self.bands_m, *(tuple(getattr(self, name).items()) for name in mappings)))
+
     @property
     def max_range_m(self) -> float:
         """How far the detector sees anything (m): the last band's edge."""

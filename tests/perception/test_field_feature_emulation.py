@@ -25,6 +25,7 @@ from perception.field.visibility import (
     visible_features,
 )
 from perception.geometry import camera_rotation
+from perception.pipeline import PipelineConfig
 from perception.types import CameraModel, CameraState
 from perception.vision.field_features import FieldFeatureConfig
 from spl_env.sensors.emulation.field import (
@@ -268,3 +269,9 @@ def test_the_reported_covariance_grows_with_range_as_the_detectors() -> None:
     along, across = np.sqrt(cov[:, 0, 0]), np.sqrt(cov[:, 1, 1])
     assert np.all(np.diff(along) > 0) and np.all(along > across)
     np.testing.assert_array_less(0.01 + 0.01 * points[:, 0], across + 1e-12)
+
+
+def test_the_model_and_the_configs_holding_it_hash_by_value() -> None:
+    assert hash(DetectorModel()) == hash(DetectorModel())
+    assert DetectorModel() == DetectorModel()
+    hash(PipelineConfig())  # every env config is hashable
