@@ -8,7 +8,9 @@ with the head on the ``scan`` baseline among four other robots. After the walk o
 ``--interval`` s the robot is kidnapped: put down at a free pose with any heading, unknown to
 perception (:meth:`spl_env.robots.nao.NaoRobot.place`). At the end of each interval: the
 position error of the believed pose, and whether it lies on the correct end, nearer the true
-pose than its twin through the centre spot (the field's symmetry). The same episodes without
+pose than its twin through the centre spot (the field's symmetry), and how many of the
+recogniser's observations of the end the camera faces were right and wrong (against the true
+camera heading) after the walk-on. The same episodes without
 natural landmarks (``field_end="none"``) beside it: the field features alone relocalise on the
 truth or its twin.
 
@@ -37,6 +39,8 @@ import torch
 
 import spl_env  # noqa: F401  (registers the env ids)
 from agents.evaluate import load_policy
+from perception.landmarks.field_end import AWAY, HOME
+from perception.representations import FIELD_END
 from spl_env.envs.core import SplEnv
 
 RESULTS = Path("benchmarks/results")
@@ -70,17 +74,29 @@ def episode(field_end: str, seed: int, args: argparse.Namespace) -> list[dict[st
         int((args.walk_on + k * args.interval) * steps_per_s) for k in range(args.kidnaps)
     }
     end_steps = {s + int(args.interval * steps_per_s) for s in kidnap_steps}
+    seen = {"right": 0, "wrong": 0}  # field-end observations against the true facing
     for step in range(1, int(total_s * steps_per_s) + 1):
         action, _ = policy.predict(obs, deterministic=True)
         obs, _, _, _, info = env.step(action)
+        observation = getattr(core.perception_output.get(FIELD_END), "observation", 0)
+        if observation:
+            camera = info["ground_truth"]["robot_pose"][2] + info["ground_truth"]["head"][0]
+            facing = AWAY if math.cos(camera) > 0 else HOME
+            seen["right" if observation == facing else "wrong"] += 1
         if step in end_steps:
             truth = info["ground_truth"]["robot_pose"]
             belief = info["perception"]["pose"]
             error = float(np.hypot(*(belief[:2] - truth[:2])))
             twin = float(np.hypot(*(belief[:2] + truth[:2])))
             results.append(
-                {"error_m": error, "twin_error_m": twin, "correct_end": bool(error < twin)}
+                {
+                    "error_m": error,
+                    "twin_error_m": twin,
+                    "correct_end": bool(error < twin),
+                    "end_observations": dict(seen),  # since the last kidnap
+                }
             )
+            seen = {"right": 0, "wrong": 0}
         if step in kidnap_steps:
             others = core.robots[1:]
             core.robots[0].place(core.placement.free_pose(rng, others))
@@ -116,7 +132,12 @@ def main() -> None:
             print(name, args.seed + k, json.dumps(result), flush=True)
             kidnaps += result
         correct = [r for r in kidnaps if r["correct_end"]]
+        observations = {
+            verdict: sum(r["end_observations"][verdict] for r in kidnaps)
+            for verdict in ("right", "wrong")
+        }
         rows[name] = {
+            "end_observations": observations,
             "kidnaps": len(kidnaps),
             "correct_end": len(correct),
             "mean_error_correct_end_m": float(np.mean([r["error_m"] for r in correct]))
@@ -139,11 +160,13 @@ def main() -> None:
         f"Kidnaps after a {args.walk_on:.0f} s walk-on, one every {args.interval:.0f} s, "
         f"seeds {args.seed}-{args.seed + args.episodes - 1} (seed 004 Table 4)",
         "",
-        "| localisation | correct end | mean error on the correct end (m) | median error (m) |",
-        "|---|---|---|---|",
+        "| localisation | correct end | mean error on the correct end (m) | median error (m) "
+        "| field-end observations right / wrong |",
+        "|---|---|---|---|---|",
         *(
             f"| {name} | {r['correct_end']} of {r['kidnaps']} | "
-            f"{r['mean_error_correct_end_m']:.3f} | {r['median_error_m']:.3f} |"
+            f"{r['mean_error_correct_end_m']:.3f} | {r['median_error_m']:.3f} | "
+            f"{r['end_observations']['right']} / {r['end_observations']['wrong']} |"
             for name, r in rows.items()
         ),
         "",
