@@ -197,6 +197,25 @@ _OWN_RULES = frozenset(
 )
 
 
+def detection_covariances(
+    projection: GroundProjection, pixels: FloatArray, points: FloatArray, config: FieldFeatureConfig
+) -> FloatArray:
+    """(N, 2, 2) covariance the detector with ``config`` reports for the ground ``points``
+    (N, 2) m seen at ``pixels`` (N, 2) px through ``projection`` (its row-shifted camera):
+    ``pixel_std_px`` through the ground projection (at or beyond the horizon, the closed form at
+    the image centre), plus ``floor_std_m + range_std_fraction * range`` on each axis (module
+    docstring, step 6). The geometric camera mode's emulator reports the same."""
+    cov = projection.covariances(pixels, config.pixel_std_px)
+    distance = np.hypot(points[:, 0], points[:, 1])
+    bad = ~np.isfinite(cov).all(axis=(1, 2))
+    if bad.any():
+        h = float(projection.position[2])
+        std = (distance[bad] ** 2 + h**2) / (h * projection.fy) * config.pixel_std_px
+        cov[bad] = std[:, None, None] ** 2 * np.eye(2)
+    floor = (config.floor_std_m + config.range_std_fraction * distance) ** 2
+    return np.asarray(cov + floor[:, None, None] * np.eye(2), dtype=np.float64)
+
+
 class _Frame:
     """One image's masks and the camera, with the covariance model of ``config``."""
 
@@ -233,16 +252,7 @@ class _Frame:
 
     def covariances(self, pixels: FloatArray, points: FloatArray) -> FloatArray:
         """(N, 2, 2) covariance of the ground ``points`` (N, 2) m seen at ``pixels`` (N, 2)."""
-        cfg, cam = self.config, self.camera
-        cov = self.projection.covariances(pixels, cfg.pixel_std_px)
-        distance = np.hypot(points[:, 0], points[:, 1])
-        bad = ~np.isfinite(cov).all(axis=(1, 2))
-        if bad.any():  # at or beyond the horizon: the closed form at the image centre
-            h = float(self.state.position[2])
-            std = (distance[bad] ** 2 + h**2) / (h * cam.fy) * cfg.pixel_std_px
-            cov[bad] = std[:, None, None] ** 2 * np.eye(2)
-        floor = (cfg.floor_std_m + cfg.range_std_fraction * distance) ** 2
-        return np.asarray(cov + floor[:, None, None] * np.eye(2), dtype=np.float64)
+        return detection_covariances(self.projection, pixels, points, self.config)
 
     def point_covariances(self, points: FloatArray) -> FloatArray:
         """:meth:`covariances` of ground ``points`` (N, 2) at their own (virtual) pixels."""

@@ -40,8 +40,8 @@ from perception.field.field_map import FieldMap
 from perception.field.visibility import FeatureViewConfig, detect, visible_features
 from perception.geometry import FloatArray, pixel_rays, project_points, ray_ground_intersection
 from perception.types import CameraModel, CameraState
-from perception.vision.field_features import FieldFeatureConfig
-from perception.vision.field_pixels import ground_covariances, pixels_of, row_shifted
+from perception.vision.field_features import FieldFeatureConfig, detection_covariances
+from perception.vision.field_pixels import GroundProjection, row_shifted
 from spl_env.robots.nao import NaoRobot, camera_state_for
 from spl_env.sim.world import BulletWorld
 
@@ -99,16 +99,8 @@ def detector_covariances(
 ) -> FloatArray:
     """(N, 2, 2) covariances the detector with ``config`` reports for ground ``points`` (N, 2)
     seen at their own pixels (``perception.vision.field_features``' covariance model, step 6)."""
-    cam = row_shifted(camera, config.row_offset_px)
-    cov = ground_covariances(pixels_of(points, cam, state), cam, state, config.pixel_std_px)
-    distance = np.hypot(points[:, 0], points[:, 1])
-    bad = ~np.isfinite(cov).all(axis=(1, 2))
-    if bad.any():  # at or beyond the horizon: the closed form at the image centre
-        h = float(state.position[2])
-        std = (distance[bad] ** 2 + h**2) / (h * cam.fy) * config.pixel_std_px
-        cov[bad] = std[:, None, None] ** 2 * np.eye(2)
-    floor = (config.floor_std_m + config.range_std_fraction * distance) ** 2
-    return np.asarray(cov + floor[:, None, None] * np.eye(2), dtype=np.float64)
+    projection = GroundProjection(row_shifted(camera, config.row_offset_px), state)
+    return detection_covariances(projection, projection.pixels_of(points), points, config)
 
 
 class GeometricFieldFeatures:
