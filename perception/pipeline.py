@@ -23,11 +23,11 @@ Provider choice, by representation (:data:`PROVIDERS`; the defaults of
     sonar ──► sonar_observations [filter]
     laser, self_pose ──► circle_map [laser]
     self_pose (circle_slam) ──► circle_map [slam]
-    image ──► horizon_features [surf1d]
+    image, robot_sightings ──► horizon_features [surf1d]
     odometry_delta ──► odometry [reported]
-    odometry_delta, horizon_features, robot_sightings ──► odometry [visual]
+    odometry_delta, horizon_features ──► odometry [visual]
     odometry ──► odometry_pose [dead_reckoning]
-    horizon_features, robot_sightings, field_features, self_pose (the last frame's)
+    horizon_features, field_features, self_pose (the last frame's)
                                   ──► field_end [none | bag_of_words] ──► self_pose [field_features]
 
 A representation an emulator delivers (``emulated``: the geometric camera mode's pole
@@ -49,7 +49,7 @@ from perception.field.sensor_model import SensorModelConfig
 from perception.field.visibility import FeatureViewConfig
 from perception.geometry import FloatArray
 from perception.landmarks.horizon_features import HorizonFeatureConfig
-from perception.providers.base import PerceptionContext, Provider
+from perception.providers.base import PREVIOUS, PerceptionContext, Provider
 from perception.providers.circle_slam import CircleSlamProvider, SlamCircleMap
 from perception.providers.circles import LaserCircleMap
 from perception.providers.field import (
@@ -125,7 +125,6 @@ from perception.vision.field_features import FieldFeatureConfig
 from perception.vision.robots import RobotDetectorConfig
 
 ProviderFactory = Callable[["PipelineConfig", PerceptionContext], Provider]
-PREVIOUS = "previous_"  # key prefix of the representations a provider reads one frame late
 
 # representation -> provider name -> how to build it
 PROVIDERS: Mapping[str, Mapping[str, ProviderFactory]] = {

@@ -15,13 +15,16 @@ if TYPE_CHECKING:
     from perception.vision.cnn_detector import CnnDetectorConfig, CnnPoleDetector
 
 
+PREVIOUS = "previous_"  # key prefix of the representations a provider reads one frame late
+
+
 class Provider(ABC):
     """Computes one representation per frame.
 
     ``provides`` names the representation; ``requires`` the sensor inputs (fields of
     :class:`perception.types.SensorFrame`) and representations :meth:`update` reads;
     ``requires_previous`` representations it reads as they were after the previous frame
-    (keys ``previous_<name>``, None on an episode's first frame): a loop such as a pose
+    (keys :data:`PREVIOUS` + name, None on an episode's first frame): a loop such as a pose
     filter reading a recogniser that reads the pose runs one frame apart, without a cycle.
     """
 

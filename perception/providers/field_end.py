@@ -2,19 +2,19 @@
 
 :class:`UnknownFieldEnd` (``"none"``) never knows. :class:`NaturalLandmarkFieldEnd`
 (``"bag_of_words"``) runs seed 004's Algorithm 1
-(:class:`perception.landmarks.field_end.FieldEndRecogniser`) on the frame's horizon features,
-less those on detected robots: for the first ``walk_on_s`` seconds of an episode (the walk on
-to the field, when the start pose is known) it stores views facing a goal area with a goal
-post in sight, labelled by the end the camera faces; afterwards every frame facing a goal area
-is recognised. "Facing a goal area" is judged on the previous frame's self pose (the pose
-filter reads this belief, so it runs one frame apart) and the head yaw: the camera's heading
-within ``facing_tolerance_rad`` of +x (the away goal, which our team attacks) or -x (home),
-and its optical axis meeting the carpet's end edge between the side lines' extensions. Views
-of the side boards are left out: the same side posters show whether the robot faces one end
-or the other, so they would vote for both. So are the features on the faced goal (between its
-posts' bearings, from that pose, widened by ``goal_margin_rad``): the two goals look alike,
-and on the horizon band a goal and its net are the largest structure in view; and those on
-the side boards at the view's edges (a ray that does not meet the faced end's edge within the
+(:class:`perception.landmarks.field_end.FieldEndRecogniser`) on the frame's horizon features
+(already without those on detected robots): for the first ``walk_on_s`` seconds of an episode
+(the walk on to the field, when the start pose is known) it stores views facing a goal area
+with a goal post in sight, labelled by the end the camera faces; afterwards every frame facing
+a goal area is recognised. "Facing a goal area" is judged on the previous frame's self pose
+(the pose filter reads this belief, so it runs one frame apart) and the head yaw: the camera's
+heading within ``facing_tolerance_rad`` of +x (the away goal, which our team attacks) or -x
+(home), and its optical axis meeting the carpet's end edge between the side lines' extensions.
+Views of the side boards are left out: the same side posters show whether the robot faces one
+end or the other, so they would vote for both. So are the features on the faced goal (between
+its posts' bearings, from that pose, widened by ``goal_margin_rad``): the two goals look alike,
+and on the horizon band a goal and its net are the largest structure in view; and those on the
+side boards at the view's edges (a ray that does not meet the faced end's edge within the
 carpet's width), which a view of the other end from the same side shares.
 """
 
@@ -38,13 +38,11 @@ from perception.landmarks.field_end import (
 )
 from perception.landmarks.horizon_features import HorizonFeatures
 from perception.landmarks.vocabulary import default_vocabulary
-from perception.providers.base import PerceptionContext, Provider
-from perception.providers.landmarks import features_off_robots
+from perception.providers.base import PREVIOUS, PerceptionContext, Provider
 from perception.representations import (
     FIELD_END,
     FIELD_FEATURES,
     HORIZON_FEATURES,
-    ROBOT_SIGHTINGS,
     SELF_POSE,
     Prior,
 )
@@ -92,7 +90,7 @@ class NaturalLandmarkFieldEnd(Provider):
     """Seed 004's natural landmark localisation system (module docstring)."""
 
     provides = FIELD_END
-    requires = (HORIZON_FEATURES, ROBOT_SIGHTINGS, FIELD_FEATURES)
+    requires = (HORIZON_FEATURES, FIELD_FEATURES)
     requires_previous = (SELF_POSE,)
 
     def __init__(self, config: FieldEndProviderConfig, context: PerceptionContext) -> None:
@@ -113,24 +111,22 @@ class NaturalLandmarkFieldEnd(Provider):
             raise RuntimeError("NaturalLandmarkFieldEnd.reset() must be called first")
         if self._start_s is None:
             self._start_s = time_s
-        seen: HorizonFeatures = features_off_robots(
-            inputs[HORIZON_FEATURES], inputs[ROBOT_SIGHTINGS]
-        )
-        previous = inputs["previous_" + SELF_POSE]
+        seen: HorizonFeatures = inputs[HORIZON_FEATURES]
+        previous = inputs[PREVIOUS + SELF_POSE]
         pose = self._start if previous is None else previous.pose
         facing = self._facing(pose, pose[2] + seen.head_yaw)
+        words, x = np.zeros(0, dtype=np.int64), np.zeros(0)  # not facing a goal area: unread
         if facing:
             seen = seen.without(
                 self._on_goal(seen, pose, facing) | ~self._on_end(seen, pose, facing)
             )
-        words = self.vocabulary.quantise(seen.features.descriptors)
-        x = seen.features.x
+            words, x = self.vocabulary.quantise(seen.features.descriptors), seen.features.x
         if time_s - self._start_s < self.config.walk_on_s:
             post_visible = any(f.kind == "goal_post" for f in inputs[FIELD_FEATURES])
             self._recogniser.build(
                 words,
                 x,
-                facing if facing else AWAY,
+                facing or AWAY,  # the label of a frame not facing a goal area is never read
                 facing_goal=facing != 0,
                 post_visible=post_visible,
             )

@@ -1,10 +1,10 @@
 """Natural landmarks and the odometry the pose estimators use, as providers.
 
 ``horizon_features``: :class:`HorizonFeatureProvider`, the frame's 1D SURF features on the
-horizon (:mod:`perception.landmarks.horizon_features`). ``odometry``: :class:`WalkOdometry`
-(the walk engine's report, as it is) or :class:`VisualOdometry` (its heading change replaced
-by the visual heading odometry of seed 004 ch. 5 when the horizon's votes are confident,
-features on detected robots discarded, with the collision flag).
+horizon (:mod:`perception.landmarks.horizon_features`) less those on detected robots.
+``odometry``: :class:`WalkOdometry` (the walk engine's report, as it is) or
+:class:`VisualOdometry` (its heading change replaced by the visual heading odometry of seed 004
+ch. 5 when the horizon's votes are confident, with the collision flag).
 """
 
 from __future__ import annotations
@@ -33,17 +33,19 @@ from perception.types import CameraModel, OdometryStep, RobotSighting
 
 
 class HorizonFeatureProvider(Provider):
-    """The 1D SURF features on the horizon of the frame's image."""
+    """The 1D SURF features on the horizon of the frame's image, less those on detected
+    robots (seed 004 discards them for visual odometry and natural landmarks alike)."""
 
     provides = HORIZON_FEATURES
-    requires = ("image", "camera_state")
+    requires = ("image", "camera_state", ROBOT_SIGHTINGS)
 
     def __init__(self, config: HorizonFeatureConfig, context: PerceptionContext) -> None:
         self.config = config
         self.camera: CameraModel = context.require_camera("the horizon features")
 
     def update(self, inputs: Mapping[str, Any], time_s: float) -> HorizonFeatures:
-        return horizon_features(inputs["image"], self.camera, inputs["camera_state"], self.config)
+        found = horizon_features(inputs["image"], self.camera, inputs["camera_state"], self.config)
+        return features_off_robots(found, inputs[ROBOT_SIGHTINGS])
 
 
 class WalkOdometry(Provider):
@@ -67,11 +69,10 @@ class VisualOdometryProviderConfig:
 
 class VisualOdometry(Provider):
     """The walk's translation with the heading change of the horizon features (seed 004
-    ch. 5), the walk's heading change where their votes are not confident. Features on
-    detected robots are discarded first (seed 004 §5.2)."""
+    ch. 5), the walk's heading change where their votes are not confident."""
 
     provides = ODOMETRY
-    requires = ("odometry_delta", HORIZON_FEATURES, ROBOT_SIGHTINGS)
+    requires = ("odometry_delta", HORIZON_FEATURES)
 
     def __init__(self, config: VisualOdometryProviderConfig) -> None:
         self.config = config
@@ -84,8 +85,7 @@ class VisualOdometry(Provider):
 
     def update(self, inputs: Mapping[str, Any], time_s: float) -> OdometryStep:
         walk = np.asarray(inputs["odometry_delta"], dtype=np.float64)
-        features = features_off_robots(inputs[HORIZON_FEATURES], inputs[ROBOT_SIGHTINGS])
-        step = self.heading.update(features, float(walk[2]))
+        step = self.heading.update(inputs[HORIZON_FEATURES], float(walk[2]))
         collision = self.collisions.update(step.delta_rad, float(walk[2]))
         return OdometryStep(
             delta=np.array([walk[0], walk[1], step.delta_rad]),

@@ -14,8 +14,8 @@ from perception.landmarks.field_end import AWAY, HOME
 from perception.landmarks.horizon_features import HorizonFeatures
 from perception.landmarks.surf1d import Surf1dFeatures
 from perception.landmarks.vocabulary import default_vocabulary
-from perception.pipeline import PREVIOUS, PerceptionPipeline, PipelineConfig
-from perception.providers.base import PerceptionContext
+from perception.pipeline import PerceptionPipeline, PipelineConfig
+from perception.providers.base import PREVIOUS, PerceptionContext
 from perception.providers.field_end import FieldEndProviderConfig, NaturalLandmarkFieldEnd
 from perception.representations import (
     FIELD_END,
@@ -72,7 +72,6 @@ def test_views_stored_on_the_walk_on_tell_the_ends_apart_later() -> None:
         for k in range(5):
             inputs = {
                 HORIZON_FEATURES: view(end, shift_px=2.0 * k),
-                ROBOT_SIGHTINGS: (),
                 FIELD_FEATURES: (POST,),
                 PREVIOUS + SELF_POSE: estimate(heading),
             }
@@ -85,7 +84,6 @@ def test_views_stored_on_the_walk_on_tell_the_ends_apart_later() -> None:
             # the pose believes the robot faces +x whatever it sees: recognition must not care
             inputs = {
                 HORIZON_FEATURES: view(end, shift_px=5.0 + k % 3),
-                ROBOT_SIGHTINGS: (),
                 FIELD_FEATURES: (),
                 PREVIOUS + SELF_POSE: estimate(0.0),
             }
@@ -100,7 +98,6 @@ def test_a_camera_facing_the_side_line_is_not_recognised() -> None:
     provider.reset(Prior(pose=np.zeros(3), rng=np.random.default_rng(0)))
     inputs = {
         HORIZON_FEATURES: view(AWAY),
-        ROBOT_SIGHTINGS: (),
         FIELD_FEATURES: (POST,),
         PREVIOUS + SELF_POSE: estimate(math.pi / 2),  # facing the side
     }
@@ -110,15 +107,16 @@ def test_a_camera_facing_the_side_line_is_not_recognised() -> None:
     assert belief.hits == () and belief.certain == 0
 
 
-def test_the_pipeline_feeds_the_previous_frames_pose() -> None:
+def test_the_pipeline_runs_the_field_end_before_the_pose_it_reads_late() -> None:
     config = PipelineConfig(
         self_pose="field_features", field_features="oracle", field_end="bag_of_words"
     )
     pipeline = PerceptionPipeline(config, CONTEXT, outputs=[SELF_POSE])
     order = pipeline.representations
     assert order.index(FIELD_END) < order.index(SELF_POSE)  # no cycle: the pose comes late
-    provider = pipeline.provider(FIELD_END)
-    assert provider.requires_previous == (SELF_POSE,)
+    assert isinstance(pipeline.provider(FIELD_END), NaturalLandmarkFieldEnd)
+    # the features on robots go before anyone reads the horizon
+    assert order.index(ROBOT_SIGHTINGS) < order.index(HORIZON_FEATURES) < order.index(FIELD_END)
 
 
 def test_bad_provider_settings_are_refused() -> None:

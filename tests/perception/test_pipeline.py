@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from perception.pipeline import PROVIDERS, PerceptionPipeline, PipelineConfig
-from perception.providers.base import PerceptionContext
+from perception.providers.base import PREVIOUS, PerceptionContext
 from perception.providers.landmarks import WalkOdometry
 from perception.providers.odometry import DeadReckoning
 from perception.providers.poles import ColourPoleSightings, PoleSightingHistory
@@ -468,7 +468,7 @@ def test_a_provider_reads_a_representation_one_frame_late(
         requires_previous = (ODOMETRY_POSE,)
 
         def update(self, inputs, time_s):  # type: ignore[no-untyped-def]
-            return inputs[pipeline_module.PREVIOUS + ODOMETRY_POSE]
+            return inputs[PREVIOUS + ODOMETRY_POSE]
 
     providers = {**pipeline_module.PROVIDERS, "echo": {"only": lambda c, ctx: EchoPrevious()}}
     monkeypatch.setattr(pipeline_module, "PROVIDERS", providers)
