@@ -309,9 +309,9 @@ def json_safe(value: Any) -> Any:
     return value
 
 
-def make_env(args: argparse.Namespace, bump_turn_rps: float) -> gym.Env:
-    """The patrol env of the module docstring."""
-    overrides: dict[str, Any] = {
+def env_overrides(args: argparse.Namespace, bump_turn_rps: float) -> dict[str, Any]:
+    """The ``gym.make`` settings of the patrol env of the module docstring."""
+    return {
         "frontend": "colour",
         "self_pose": "oracle",
         "n_other_robots": args.robots,
@@ -321,7 +321,11 @@ def make_env(args: argparse.Namespace, bump_turn_rps: float) -> gym.Env:
         "perception.odometry": "visual",
         "robot.bump_turn_rps": bump_turn_rps,
     }
-    return gym.make("SPL/ActiveVision-v1", **overrides)
+
+
+def make_env(args: argparse.Namespace, bump_turn_rps: float) -> gym.Env:
+    """The patrol env of the module docstring."""
+    return gym.make("SPL/ActiveVision-v1", **env_overrides(args, bump_turn_rps))
 
 
 def walks(args: argparse.Namespace, first_seed: int, bump_turn_rps: float) -> list[dict[str, Any]]:
@@ -437,16 +441,7 @@ def main() -> None:
     result = {
         "setup": {
             "env": "SPL/ActiveVision-v1",
-            "overrides": {
-                "frontend": "colour",
-                "self_pose": "oracle",
-                "n_other_robots": args.robots,
-                "episode_s": args.episode_s,
-                "scene.poles_enabled": False,
-                "scene.poster_set": "textured",
-                "perception.odometry": "visual",
-                "robot.bump_turn_rps": args.bump_turn,
-            },
+            "overrides": env_overrides(args, args.bump_turn),
             "head": args.head,
             "body_behaviour": "patrol",
             "window_frames": args.window,
