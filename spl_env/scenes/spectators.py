@@ -59,6 +59,7 @@ class Spectators:
             red, green, blue = (float(c) for c in rng.uniform(0.1, 0.95, 3))
             world.add_static(name, _person((red, green, blue, 1.0)), collide=False)
         self._side = np.zeros(count, dtype=np.int64)
+        self._half = np.zeros(count)  # half the length of each one's side (m)
         self._along = np.zeros(count)  # position along the side (m), in [-half, half]
         self._velocity = np.zeros(count)  # along the side (m/s)
 
@@ -66,19 +67,20 @@ class Spectators:
         """Draw each spectator's side, place, direction and speed; put them there."""
         n = len(self.names)
         self._side = rng.integers(0, len(self._sides), size=n)
-        halves = np.array([self._sides[s][2] for s in self._side])
-        self._along = rng.uniform(-halves, halves)
+        self._half = np.array([self._sides[s][2] for s in self._side])
+        self._along = rng.uniform(-self._half, self._half)
         speed = self.speed_mps * rng.uniform(1 - SPEED_SPREAD, 1 + SPEED_SPREAD, size=n)
         self._velocity = speed * rng.choice([-1.0, 1.0], size=n)
         self._place()
 
     def move(self, dt_s: float) -> None:
         """Walk on for ``dt_s`` (s), turning back at the end of the side."""
-        halves = np.array([self._sides[s][2] for s in self._side])
+        if not self.names:
+            return
         along = self._along + self._velocity * dt_s
-        turned = np.abs(along) > halves
+        turned = np.abs(along) > self._half
         self._velocity[turned] = -self._velocity[turned]
-        self._along = np.clip(along, -halves, halves)
+        self._along = np.clip(along, -self._half, self._half)
         self._place()
 
     @property
