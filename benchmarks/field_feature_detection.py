@@ -58,7 +58,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from perception.field.features import FeatureKind, FieldFeature
+from perception.field.features import FEATURE_KINDS, SEGMENT_KINDS, FeatureKind, FieldFeature
 from perception.field.field_map import FieldMap, MapFeature
 from perception.geometry import (
     FloatArray,
@@ -232,15 +232,7 @@ def evaluate_frame(
                     stats[group]["should"] += 1
                     stats[group]["recalled"] += k in found
     lines = [t.points for t in field.of_kind("line")]
-    point_kinds: tuple[FeatureKind, ...] = (
-        "corner",
-        "t_junction",
-        "x_junction",
-        "centre_circle",
-        "penalty_mark",
-        "goal_post",
-    )
-    for kind in point_kinds:
+    for kind in (k for k in FEATURE_KINDS if k not in SEGMENT_KINDS):
         targets = list(field.of_kind(kind))
         tol = FAR_POINT_TOL_M if kind == "goal_post" else POINT_TOL_M
         found = set()
