@@ -2,11 +2,15 @@
 
     python benchmarks/env_speed.py --steps 300 --out benchmarks/results/env_speed.json
 
-Runs ``SPL/ActiveVision-v0`` with random head actions (one process, one env) and times whole
-``env.step`` calls; the parts come from ``info["timing"]`` (the env is made with
-``info_timing=True``), and "other" is the rest (observation, reward, info, Python overhead).
-Also the wall time of the first ``env.reset()`` (the first episode start, e.g. the CNN's first
-pass) and the mean of ``--resets`` later ones (what each new episode costs).
+Runs ``SPL/ActiveVision-v0`` with random head actions, one env per setting (rendered, rendered
+with randomised lighting, geometric) in one process, and times whole ``env.step`` calls; the
+parts come from ``info["timing"]`` (the envs are made with ``info_timing=True``), and "other" is
+the rest (observation, reward, info, Python overhead). The settings' envs step in turn, one
+step each (the same actions; which goes first rotates), so that the load of other jobs on a
+shared CPU falls on all of them alike: ``geometric_over_rendered`` (the geometric setting's
+steps per second over the rendered one's) compares like with like. Also the wall time of the
+first ``env.reset()`` (the first episode start, e.g. the CNN's first pass) and the mean of
+``--resets`` later ones (what each new episode costs).
 """
 
 from __future__ import annotations
@@ -35,24 +39,45 @@ def _timed_reset(env: gym.Env, seed: int) -> float:
 
 
 def measure(
-    env_id: str, steps: int, resets: int, seed: int, overrides: dict[str, Any]
+    env_id: str, steps: int, resets: int, seed: int, settings: tuple[dict[str, Any], ...]
+) -> list[dict[str, Any]]:
+    """Time the first reset of each setting's env, ``steps`` env steps after it (the settings
+    in turn), then ``resets`` later resets of each."""
+    envs = [gym.make(env_id, info_timing=True, **o) for o in settings]
+    actions = envs[0].action_space
+    actions.seed(seed)
+    first_reset_s = [_timed_reset(env, seed) for env in envs]
+    totals = [dict.fromkeys(PARTS, 0.0) for _ in envs]
+    step_s: list[list[float]] = [[] for _ in envs]
+    for k in range(steps):
+        action = actions.sample()
+        for i in np.roll(np.arange(len(envs)), k):
+            t0 = time.perf_counter()
+            *_, terminated, truncated, info = envs[i].step(action)
+            step_s[i].append(time.perf_counter() - t0)
+            for part in PARTS:
+                totals[i][part] += info["timing"][part]
+            if terminated or truncated:
+                envs[i].reset()
+    later_reset_s = [[_timed_reset(env, seed + 1 + k) for k in range(resets)] for env in envs]
+    for env in envs:
+        env.close()
+    return [
+        _summary(env_id, o, step_s[i], totals[i], first_reset_s[i], later_reset_s[i])
+        for i, o in enumerate(settings)
+    ]
+
+
+def _summary(
+    env_id: str,
+    overrides: dict[str, Any],
+    step_s: list[float],
+    totals: dict[str, float],
+    first_reset_s: float,
+    later_reset_s: list[float],
 ) -> dict[str, Any]:
-    """Time the first reset, ``steps`` env steps after it, then ``resets`` later resets."""
-    env = gym.make(env_id, info_timing=True, **overrides)
-    env.action_space.seed(seed)
-    first_reset_s = _timed_reset(env, seed)
-    totals = dict.fromkeys(PARTS, 0.0)
-    step_s = []
-    for _ in range(steps):
-        t0 = time.perf_counter()
-        *_, terminated, truncated, info = env.step(env.action_space.sample())
-        step_s.append(time.perf_counter() - t0)
-        for part in PARTS:
-            totals[part] += info["timing"][part]
-        if terminated or truncated:
-            env.reset()
-    later_reset_s = [_timed_reset(env, seed + 1 + k) for k in range(resets)]
-    env.close()
+    """One setting's steps per second, step times (ms), reset times (ms) and parts' shares."""
+    steps = len(step_s)
     total = float(np.sum(step_s))
     shares = {part: totals[part] / total for part in PARTS}
     shares["other"] = 1.0 - sum(shares.values())
@@ -66,7 +91,7 @@ def measure(
         "reset_ms": {
             "first": 1000 * first_reset_s,
             "later_mean": 1000 * float(np.mean(later_reset_s)) if later_reset_s else None,
-            "later_resets": resets,
+            "later_resets": len(later_reset_s),
         },
         "share": shares,
         "mean_ms": {part: 1000 * totals[part] / steps for part in PARTS},
@@ -88,10 +113,11 @@ def main() -> None:
         {"randomise_lighting": True},
         {"camera_mode": "geometric", "frontend": "colour"},
     )
-    runs = [measure(args.env, args.steps, args.resets, args.seed, o) for o in settings]
+    runs = measure(args.env, args.steps, args.resets, args.seed, settings)
     result = {
         "machine": {"cpu_count": os.cpu_count(), "python": platform.python_version()},
         "runs": runs,
+        "geometric_over_rendered": runs[2]["steps_per_second"] / runs[0]["steps_per_second"],
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(result, indent=2))

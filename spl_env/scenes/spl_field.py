@@ -1,7 +1,8 @@
 """The SPL field scene: the static world built from primitive shapes, and its ground truth.
 
-Carpet with painted lines (one compound body), two goals, the six landmark poles of seed 000,
-a ball, and boards with textured posters around the field for realistic clutter.
+Carpet (the world's painted floor) with painted lines (one mesh), two goals, the six landmark
+poles of seed 000, a ball, and boards with textured posters around the field for realistic
+clutter.
 :class:`SplFieldScene` builds it once per env and answers what is where: the poles (landmark
 ids and positions), the obstacles robots walk around, the ball's body.
 """
@@ -20,7 +21,7 @@ from perception.types import PoleCode, PoleGeometry
 from perception.validation import check_choice, check_in_interval, check_int, check_positive
 from spl_env.field import FieldDimensions, PoleLayout
 from spl_env.scenes.spectators import Spectators
-from spl_env.sim.world import MAX_PARTS_PER_BODY, BulletWorld, VisualPart
+from spl_env.sim.world import BulletWorld, TriangleMesh, VisualPart
 
 CARPET_RGBA = (0.16, 0.48, 0.18, 1.0)
 LINE_RGBA = (0.95, 0.95, 0.95, 1.0)
@@ -43,7 +44,7 @@ POSTER_SETS = {
     "textured": tuple(f"textured_{i:02d}.png" for i in range(40)),
 }
 DISTINCT_POSTERS = {"classic": False, "textured": True}
-LINE_THICKNESS_M = 0.002  # painted-line boxes stand this proud of the carpet
+LINE_THICKNESS_M = 0.002  # painted lines lie this high above the carpet
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -64,6 +65,10 @@ class SceneConfig:
     # People walking between the carpet and the boards (spl_env.scenes.spectators); 0: none
     spectators: int = 0
     spectator_speed_mps: float = 1.0
+    # The painted lines are cut into pieces no longer than this (m) for the tiny renderer,
+    # which scans each triangle's screen bounding box: short pieces waste less of that scan on
+    # long thin lines seen aslant; the pixels do not change.
+    line_piece_m: float = 0.5
 
     def __post_init__(self) -> None:
         owner = "SceneConfig"
@@ -76,6 +81,7 @@ class SceneConfig:
         check_choice(owner, "poster_set", self.poster_set, tuple(POSTER_SETS))
         check_int(owner, "spectators", self.spectators, 0)
         check_positive(owner, "spectator_speed_mps", self.spectator_speed_mps, upper=3.0)
+        check_positive(owner, "line_piece_m", self.line_piece_m, upper=20.0)
         carpet_l = self.dimensions.carpet_size_m[0]
         r = self.poles.geometry.radius_m
         if self.poles.offset_outside_m + r > self.dimensions.border_strip_m:
@@ -101,27 +107,15 @@ class SceneBodies:
 
 
 def build_scene(world: BulletWorld, config: SceneConfig, rng: np.random.Generator) -> SceneBodies:
-    """Create every static body and the ball; ``rng`` picks the posters for the boards."""
+    """Create every static body and the ball; ``rng`` picks the posters for the boards.
+
+    The carpet is the world's painted floor (:class:`spl_env.sim.world.PaintedFloor`): the
+    renderer leaves it out and each frame gets its one colour where nothing else is seen. The
+    tiny renderer draws the other bodies in the order they were made, shading every pixel that
+    passes the depth test: what stands on the ground comes before the lines on it, so that a
+    line is not shaded where a goal or a pole covers it.
+    """
     dims = config.dimensions
-    carpet_l, carpet_w = dims.carpet_size_m
-    world.add_static(
-        "carpet",
-        [
-            VisualPart(
-                shape="box",
-                size=(carpet_l / 2, carpet_w / 2, 0.01),
-                position=(0.0, 0.0, -0.01),
-                rgba=CARPET_RGBA,
-            )
-        ],
-    )
-    lines = _line_parts(dims)
-    for k in range(0, len(lines), MAX_PARTS_PER_BODY):
-        world.add_static(
-            f"field_lines_{k // MAX_PARTS_PER_BODY}",
-            lines[k : k + MAX_PARTS_PER_BODY],
-            collide=False,
-        )
     posts = _add_goals(world, dims)
     poles: dict[int, str] = {}
     if config.poles_enabled:
@@ -133,6 +127,11 @@ def build_scene(world: BulletWorld, config: SceneConfig, rng: np.random.Generato
             )
             poles[code.landmark_id] = name
     posters = _add_boards(world, config, rng) if config.boards_enabled else {}
+    world.add_static_mesh("field_lines_0", _line_mesh(dims, config.line_piece_m), LINE_RGBA)
+    half = (dims.carpet_size_m[0] / 2, dims.carpet_size_m[1] / 2)
+    # the ball rolls on (and rays hit) a 2 cm slab; the camera sees its top face, painted
+    slab = VisualPart(shape="box", size=(*half, 0.01), position=(0, 0, -0.01), rgba=CARPET_RGBA)
+    world.add_painted_floor("carpet", half, CARPET_RGBA, collision=[slab])
     radius = dims.ball_diameter_m / 2
     world.add_sphere(
         "ball",
@@ -146,41 +145,73 @@ def build_scene(world: BulletWorld, config: SceneConfig, rng: np.random.Generato
     return SceneBodies(poles=poles, goal_posts=posts, ball="ball", posters=posters)
 
 
-def _flat_box(x0: float, y0: float, x1: float, y1: float, width: float) -> VisualPart:
-    """A painted stripe from (x0, y0) to (x1, y1), ``width`` wide, lying on the carpet."""
-    length = math.hypot(x1 - x0, y1 - y0) + width
-    return VisualPart(
-        shape="box",
-        size=(length / 2, width / 2, LINE_THICKNESS_M / 2),
-        position=((x0 + x1) / 2, (y0 + y1) / 2, LINE_THICKNESS_M / 2),
-        rgba=LINE_RGBA,
-        yaw=math.atan2(y1 - y0, x1 - x0),
+def _quads(corners: FloatArray, normals: FloatArray) -> TriangleMesh:
+    """Flat quads: ``corners`` (Q, 4, 3) counter-clockwise seen from the side their unit
+    ``normals`` (Q, 3) point to, each quad two triangles."""
+    q = len(corners)
+    base = 4 * np.arange(q)[:, None]
+    return TriangleMesh(
+        vertices=corners.reshape(-1, 3),
+        triangles=np.concatenate([base + np.array([0, 1, 2]), base + np.array([0, 2, 3])]),
+        normals=np.repeat(normals, 4, axis=0),
     )
 
 
-def _line_parts(dims: FieldDimensions, circle_segments: int = 32) -> list[VisualPart]:
-    """All painted markings: straight lines, centre circle, centre mark and penalty marks."""
+def _lift(points: FloatArray, z: float) -> FloatArray:
+    """Points (..., 2) at height ``z`` (m): (..., 3)."""
+    return np.concatenate([points, np.full((*points.shape[:-1], 1), z)], axis=-1)
+
+
+def _slab(pieces: FloatArray, height: float) -> TriangleMesh:
+    """A painted stripe as the box it was: ``pieces`` (Q, 4, 2) its consecutive pieces, corners
+    ``(a - s, b - s, b + s, a + s)`` from piece start ``a`` to end ``b``, ``s`` half its width
+    to the left; top faces at ``height`` (m), the long sides of every piece and the two ends,
+    from the carpet (z = 0) up: 2 mm faces that thicken a line seen aslant from afar."""
+    low, high = _lift(pieces, 0.0), _lift(pieces, height)
+    ab = pieces[0, 1] - pieces[0, 0]
+    along = _lift(ab / np.linalg.norm(ab), 0.0)
+    left = np.array([-along[1], along[0], 0.0])
+    faces = [
+        (high, np.array([0.0, 0.0, 1.0])),
+        (np.stack([low[:, 0], low[:, 1], high[:, 1], high[:, 0]], axis=1), -left),
+        (np.stack([low[:, 2], low[:, 3], high[:, 3], high[:, 2]], axis=1), left),
+        (np.stack([low[:1, 3], low[:1, 0], high[:1, 0], high[:1, 3]], axis=1), -along),
+        (np.stack([low[-1:, 1], low[-1:, 2], high[-1:, 2], high[-1:, 1]], axis=1), along),
+    ]
+    return TriangleMesh.concatenate(
+        [_quads(corners, np.tile(normal, (len(corners), 1))) for corners, normal in faces]
+    )
+
+
+def _stripe(ends: FloatArray, width: float, piece: float) -> FloatArray:
+    """Pieces (Q, 4, 2) of a painted stripe between ``ends`` (4,) ``(x0, y0, x1, y1)`` (m),
+    ``width`` wide and reaching ``width / 2`` beyond both ends, Q of them no longer than
+    ``piece`` (m); corners as :func:`_slab` takes them."""
+    start, end = np.asarray(ends[:2], dtype=float), np.asarray(ends[2:], dtype=float)
+    length = float(np.linalg.norm(end - start)) + width
+    along = (end - start) / max(float(np.linalg.norm(end - start)), 1e-12)
+    side = np.array([-along[1], along[0]]) * width / 2
+    cuts = np.linspace(-length / 2, length / 2, max(1, math.ceil(length / piece)) + 1)
+    a = (start + end) / 2 + cuts[:-1, None] * along
+    b = (start + end) / 2 + cuts[1:, None] * along
+    return np.stack([a - side, b - side, b + side, a + side], axis=1)
+
+
+def _line_mesh(dims: FieldDimensions, piece: float, circle_segments: int = 32) -> TriangleMesh:
+    """All painted markings (straight lines, centre circle, centre and penalty marks) as slabs
+    on the carpet, long stripes cut into pieces no longer than ``piece`` (m)."""
     w = dims.line_width_m
-    parts = [_flat_box(x0, y0, x1, y1, width=w) for x0, y0, x1, y1 in dims.line_segments()]
+    stripes = [_stripe(segment, width=w, piece=piece) for segment in dims.line_segments()]
     r = dims.centre_circle_diameter_m / 2
     angles = np.linspace(0.0, 2 * math.pi, circle_segments + 1)
     for a0, a1 in itertools.pairwise(angles):
-        parts.append(
-            _flat_box(
-                r * math.cos(a0), r * math.sin(a0), r * math.cos(a1), r * math.sin(a1), width=w
-            )
-        )
+        ends = (r * math.cos(a0), r * math.sin(a0), r * math.cos(a1), r * math.sin(a1))
+        stripes.append(_stripe(np.array(ends), width=w, piece=piece))
     mark = dims.penalty_mark_diameter_m / 2
+    square = np.array([(-mark, -mark), (mark, -mark), (mark, mark), (-mark, mark)])
     for x, y in (*dims.penalty_marks(), (0.0, 0.0)):
-        parts.append(
-            VisualPart(
-                shape="box",
-                size=(mark, mark, LINE_THICKNESS_M / 2),
-                position=(x, y, LINE_THICKNESS_M / 2),
-                rgba=LINE_RGBA,
-            )
-        )
-    return parts
+        stripes.append((square + np.array([x, y]))[None])
+    return TriangleMesh.concatenate([_slab(pieces, LINE_THICKNESS_M) for pieces in stripes])
 
 
 def _add_goals(world: BulletWorld, dims: FieldDimensions) -> tuple[str, ...]:
@@ -249,6 +280,50 @@ def _pole_parts(code: PoleCode, geometry: PoleGeometry) -> list[VisualPart]:
     ]
 
 
+# PyBullet's textured box (examples/OpenGLWindow/ShapeData.h, cube_vertices_textured and
+# cube_indices): per face normal, its corners (unit box) with their texture coordinates, and
+# its two triangles; each face shows its own quarter-by-quarter part of the texture
+_BOX_FACES: dict[tuple[int, int], tuple[FloatArray, FloatArray, list[list[int]]]] = {
+    (0, -1): (
+        np.array([(-1, -1, -1), (-1, -1, 1), (1, -1, 1), (1, -1, -1)], dtype=float),
+        np.array([(0.25, 0.5), (0.25, 0.25), (0.5, 0.25), (0.5, 0.5)]),
+        [[2, 1, 0], [3, 2, 0]],
+    ),
+    (0, 1): (
+        np.array([(-1, 1, -1), (-1, 1, 1), (1, 1, 1), (1, 1, -1)], dtype=float),
+        np.array([(0.0, 0.0), (0.0, 0.25), (0.25, 0.25), (0.25, 0.0)]),
+        [[0, 1, 2], [0, 2, 3]],
+    ),
+    (-1, 0): (
+        np.array([(-1, -1, -1), (-1, 1, -1), (-1, 1, 1), (-1, -1, 1)], dtype=float),
+        np.array([(0.5, 0.0), (0.75, 0.0), (0.75, 0.25), (0.5, 0.25)]),
+        [[2, 1, 0], [3, 2, 0]],
+    ),
+    (1, 0): (
+        np.array([(1, -1, -1), (1, 1, -1), (1, 1, 1), (1, -1, 1)], dtype=float),
+        np.array([(0.25, 0.5), (0.25, 0.25), (0.0, 0.25), (0.0, 0.5)]),
+        [[0, 1, 2], [0, 2, 3]],
+    ),
+}
+
+
+def _board_face(box: VisualPart, facing: tuple[float, float]) -> TriangleMesh:
+    """The one face of the box ``box`` a camera inside the boards sees: the side whose normal
+    is the horizontal axis nearest ``facing`` (2,), textured as PyBullet textures that face
+    of a box (the rest are hidden: back and top face away, the ends touch the next board)."""
+    axis = int(abs(facing[1]) > abs(facing[0]))
+    sign = int(math.copysign(1.0, facing[axis]))
+    corners, uvs, triangles = _BOX_FACES[(sign, 0) if axis == 0 else (0, sign)]
+    normal = np.zeros(3)
+    normal[axis] = sign
+    return TriangleMesh(
+        vertices=corners * np.array(box.size) + np.array(box.position),
+        triangles=np.array(triangles),
+        normals=np.tile(normal, (4, 1)),
+        uvs=uvs,
+    )
+
+
 def _add_boards(
     world: BulletWorld, config: SceneConfig, rng: np.random.Generator
 ) -> dict[str, str]:
@@ -276,9 +351,12 @@ def _add_boards(
             x, y = (centre, fixed) if along_x else (fixed, centre)
             size = (width / 2, 0.02, h / 2) if along_x else (0.02, width / 2, h / 2)
             name = f"board_{panel}"
-            world.add_static(
+            board = VisualPart(shape="box", size=size, position=(0, 0, h / 2), rgba=BOARD_RGBA)
+            world.add_static_mesh(
                 name,
-                [VisualPart(shape="box", size=size, position=(0.0, 0.0, h / 2), rgba=BOARD_RGBA)],
+                _board_face(board, facing=(0.0, -y) if along_x else (-x, 0.0)),
+                BOARD_RGBA,
+                collision=[board],
                 base_position=(x, y, 0.0),
             )
             if order is not None:

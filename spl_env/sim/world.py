@@ -36,6 +36,72 @@ class VisualPart:
 
 
 @dataclass(frozen=True, kw_only=True)
+class TriangleMesh:
+    """Triangles of a static visual mesh, in its body's frame (m).
+
+    ``vertices`` (N, 3) and their unit ``normals`` (N, 3); ``triangles`` (M, 3) vertex indices,
+    each counter-clockwise seen from the side that shows (the tiny renderer culls back faces);
+    ``uvs`` (N, 2) texture coordinates in [0, 1], or None for an untextured mesh.
+    """
+
+    vertices: FloatArray
+    triangles: NDArray[np.int64]
+    normals: FloatArray
+    uvs: FloatArray | None = None
+
+    def __post_init__(self) -> None:
+        n = len(self.vertices)
+        if n == 0 or self.vertices.shape != (n, 3) or not np.isfinite(self.vertices).all():
+            raise ValueError(
+                f"TriangleMesh.vertices must be (N, 3) finite, got {self.vertices.shape}"
+            )
+        if self.normals.shape != (n, 3) or not np.allclose(np.linalg.norm(self.normals, axis=1), 1):
+            raise ValueError(
+                f"TriangleMesh.normals must be ({n}, 3) unit vectors, got {self.normals.shape}"
+            )
+        t = self.triangles
+        if t.ndim != 2 or t.shape[1] != 3 or len(t) == 0 or t.min() < 0 or t.max() >= n:
+            raise ValueError(
+                f"TriangleMesh.triangles must be (M, 3) indices in [0, {n}), got shape {t.shape}"
+            )
+        uvs = self.uvs
+        if uvs is not None and (uvs.shape != (n, 2) or not ((uvs >= 0) & (uvs <= 1)).all()):
+            raise ValueError(f"TriangleMesh.uvs must be ({n}, 2) in [0, 1], got {uvs.shape}")
+
+    @staticmethod
+    def concatenate(meshes: Sequence[TriangleMesh]) -> TriangleMesh:
+        """One mesh holding all of ``meshes`` (at least one, all untextured)."""
+        if any(m.uvs is not None for m in meshes):
+            raise ValueError("TriangleMesh.concatenate joins untextured meshes only")
+        offsets = np.cumsum([0] + [len(m.vertices) for m in meshes[:-1]])
+        return TriangleMesh(
+            vertices=np.concatenate([m.vertices for m in meshes]),
+            triangles=np.concatenate(
+                [m.triangles + k for m, k in zip(meshes, offsets, strict=True)]
+            ),
+            normals=np.concatenate([m.normals for m in meshes]),
+        )
+
+
+@dataclass(frozen=True, kw_only=True)
+class PaintedFloor:
+    """A floor rectangle in the plane z = 0, centred on the world origin, that
+    :meth:`BulletWorld.render` paints into each frame rather than have the tiny renderer shade it.
+
+    Flat and untextured, it comes out of the renderer in one colour per lighting: so each frame
+    paints that colour where the pixel's ray meets the rectangle before anything the renderer
+    drew (by the frame's depth buffer), as its depth test would have; a floor covering half the
+    frame costs the renderer about as much as everything else in it.
+    ``body`` is its body id (for the labels), ``half_extents`` (2,) its half length and width
+    (m), ``rgba`` its colour in [0, 1].
+    """
+
+    body: int
+    half_extents: tuple[float, float]
+    rgba: tuple[float, float, float, float]
+
+
+@dataclass(frozen=True, kw_only=True)
 class Lighting:
     """Tiny-renderer lighting of a frame: direction (3,) towards the light, colour, coefficients."""
 
@@ -54,6 +120,10 @@ class BulletWorld:
             raise ValueError(f"time_step_s must be in (0, 0.1] s, got {time_step_s}")
         self._client: int | None = p.connect(p.DIRECT)
         self._bodies: dict[str, int] = {}
+        self._floor: PaintedFloor | None = None
+        # the lighting the floor was last shaded under, and its RGB (3,) then
+        self._floor_colour_for: tuple[Lighting, NDArray[np.uint8]] | None = None
+        self._probe: int | None = None  # a client holding the floor alone, to shade it
         self.time_step_s = time_step_s
         p.setGravity(0.0, 0.0, -gravity_mps2, physicsClientId=self.client)
         p.setTimeStep(time_step_s, physicsClientId=self.client)
@@ -94,6 +164,70 @@ class BulletWorld:
             basePosition=list(base_position),
             physicsClientId=self.client,
         )
+        return self._register(name, body_id)
+
+    def add_static_mesh(
+        self,
+        name: str,
+        mesh: TriangleMesh,
+        rgba: Sequence[float],
+        *,
+        collision: Sequence[VisualPart] = (),
+        base_position: Sequence[float] = (0.0, 0.0, 0.0),
+    ) -> int:
+        """A fixed body at ``base_position`` (3,) seen as one triangle ``mesh`` (body frame) of
+        colour ``rgba``; it collides as the primitives ``collision`` (their colours unused), or
+        not at all."""
+        textured = {} if mesh.uvs is None else {"uvs": mesh.uvs.tolist()}
+        vis = p.createVisualShape(
+            p.GEOM_MESH,
+            vertices=mesh.vertices.tolist(),
+            indices=mesh.triangles.ravel().tolist(),
+            normals=mesh.normals.tolist(),
+            rgbaColor=list(finite_vector(rgba, "rgba", 4)),
+            physicsClientId=self.client,
+            **textured,
+        )
+        if vis < 0:
+            raise RuntimeError(f"PyBullet could not create the mesh {name!r}")
+        col = self._shape_array(collision, visual=False) if collision else -1
+        body_id = p.createMultiBody(
+            baseMass=0.0,
+            baseCollisionShapeIndex=col,
+            baseVisualShapeIndex=vis,
+            basePosition=list(finite_vector(base_position, "base_position", 3)),
+            physicsClientId=self.client,
+        )
+        return self._register(name, body_id)
+
+    def add_painted_floor(
+        self,
+        name: str,
+        half_extents: tuple[float, float],
+        rgba: tuple[float, float, float, float],
+        *,
+        collision: Sequence[VisualPart],
+    ) -> int:
+        """The world's :class:`PaintedFloor` (one at most): a fixed body that collides as the
+        primitives ``collision`` and that :meth:`render` paints, ``half_extents`` (2,) (m)."""
+        if self._floor is not None:
+            raise ValueError("this world has a painted floor already")
+        check_positive("", "half_extents[0]", half_extents[0])
+        check_positive("", "half_extents[1]", half_extents[1])
+        # the renderer skips a shape of alpha 0; without any, it would draw the collision shape
+        unseen = p.createVisualShape(
+            p.GEOM_BOX,
+            halfExtents=[half_extents[0], half_extents[1], 0.01],
+            rgbaColor=[*rgba[:3], 0.0],
+            physicsClientId=self.client,
+        )
+        body_id = p.createMultiBody(
+            baseMass=0.0,
+            baseCollisionShapeIndex=self._shape_array(collision, visual=False),
+            baseVisualShapeIndex=unseen,
+            physicsClientId=self.client,
+        )
+        self._floor = PaintedFloor(body=body_id, half_extents=half_extents, rgba=rgba)
         return self._register(name, body_id)
 
     def add_sphere(
@@ -369,7 +503,7 @@ class BulletWorld:
         lighting: Lighting,
     ) -> tuple[NDArray[np.uint8], NDArray[np.int32]]:
         """Tiny-renderer image (H, W, 3) uint8 RGB and (H, W) body-id labels (-1 = background)."""
-        _, _, rgba, _, seg = p.getCameraImage(
+        _, _, rgba, depth, seg = p.getCameraImage(
             width,
             height,
             viewMatrix=list(view),
@@ -383,15 +517,127 @@ class BulletWorld:
             lightSpecularCoeff=lighting.specular,
             physicsClientId=self.client,
         )
-        rgb = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3]
+        rgb = np.ascontiguousarray(
+            np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3]
+        )
         labels = np.asarray(seg, dtype=np.int32).reshape(height, width)
-        return np.ascontiguousarray(rgb), labels
+        if self._floor is not None:
+            # where nothing was drawn, and where the floor lies in front of what was: as the
+            # renderer's depth test would have it (objects meet the floor at z = 0)
+            drawn = np.asarray(depth, dtype=np.float32).reshape(height, width)
+            paint = _floor_depth(self._floor, width, height, view, projection) < drawn
+            rgb[paint] = self._floor_colour(lighting)
+            labels[paint] = self._floor.body
+        return rgb, labels
+
+    def _floor_colour(self, lighting: Lighting) -> NDArray[np.uint8]:
+        """The RGB (3,) the tiny renderer shades the painted floor in under ``lighting``: the
+        middle pixel of a 3 x 3 render of the floor alone, looking straight down at it (kept
+        for the last lighting asked for: an episode's frames share one)."""
+        if self._floor_colour_for is None or self._floor_colour_for[0] != lighting:
+            if self._probe is None:
+                self._probe = _floor_probe(self._floor_rgba())
+            _, _, rgba, _, _ = p.getCameraImage(
+                3,
+                3,
+                viewMatrix=p.computeViewMatrix([0, 0, 1], [0, 0, 0], [0, 1, 0]),
+                projectionMatrix=p.computeProjectionMatrixFOV(90.0, 1.0, 0.1, 10.0),
+                renderer=p.ER_TINY_RENDERER,
+                shadow=0,
+                lightDirection=list(lighting.direction),
+                lightColor=list(lighting.colour),
+                lightAmbientCoeff=lighting.ambient,
+                lightDiffuseCoeff=lighting.diffuse,
+                lightSpecularCoeff=lighting.specular,
+                physicsClientId=self._probe,
+            )
+            colour = np.asarray(rgba, dtype=np.uint8).reshape(3, 3, 4)[1, 1, :3].copy()
+            self._floor_colour_for = (lighting, colour)
+        return self._floor_colour_for[1]
+
+    def _floor_rgba(self) -> tuple[float, float, float, float]:
+        if self._floor is None:
+            raise RuntimeError("this world has no painted floor")
+        return self._floor.rgba
 
     def close(self) -> None:
         """Disconnect; safe to call more than once."""
         if self._client is not None:
             p.disconnect(physicsClientId=self._client)
             self._client = None
+        if self._probe is not None:
+            p.disconnect(physicsClientId=self._probe)
+            self._probe = None
+
+
+def _floor_probe(rgba: Sequence[float]) -> int:
+    """A new client holding only a 40 m square of colour ``rgba`` at z = 0, facing up."""
+    client = p.connect(p.DIRECT)
+    half = 20.0
+    vis = p.createVisualShape(
+        p.GEOM_MESH,
+        vertices=[[-half, -half, 0.0], [half, -half, 0.0], [half, half, 0.0], [-half, half, 0.0]],
+        indices=[0, 1, 2, 0, 2, 3],
+        normals=[[0.0, 0.0, 1.0]] * 4,
+        rgbaColor=list(rgba),
+        physicsClientId=client,
+    )
+    p.createMultiBody(baseMass=0.0, baseVisualShapeIndex=vis, physicsClientId=client)
+    return client
+
+
+def _floor_depth(
+    floor: PaintedFloor,
+    width: int,
+    height: int,
+    view: Sequence[float],
+    projection: Sequence[float],
+) -> NDArray[np.float32]:
+    """The depth-buffer value of ``floor`` at each pixel of a ``width`` x ``height`` frame,
+    (H, W), as ``getCameraImage`` returns depth (0 at the near plane, 1 at the far plane, the
+    cleared value); 1 where the pixel's ray does not meet the floor between the planes.
+
+    The tiny renderer samples pixel ``(col, row)`` at viewport point ``(col, height - 1 -
+    row)`` (no half-pixel offset). Each pixel's ray runs from the eye through its point on the
+    far plane of the column-major OpenGL ``view`` and perspective ``projection`` matrices (16,).
+    """
+    to_view = np.reshape(view, (4, 4)).T
+    to_clip = np.reshape(projection, (4, 4)).T
+    near = to_clip[2, 3] / (to_clip[2, 2] - 1.0)
+    far = to_clip[2, 3] / (to_clip[2, 2] + 1.0)
+    c = np.linalg.inv(to_clip @ to_view)  # world from clip
+    eye = np.linalg.inv(to_view)[:3, 3]
+    x = 2.0 * np.arange(width) / width - 1.0
+    y = 2.0 * (height - 1 - np.arange(height)) / height - 1.0
+    # a pixel's far-plane point is (d_x, d_y, d_z, w) / w with each of d and w linear in its
+    # device coordinates (x, y); d = its homogeneous point less w times the eye: d / w is the
+    # ray from the eye to it. Grids (H, W) in float32: plenty for metres and pixels.
+    w_row, d_row = c[3, 0] * x, [c[k, 0] * x - eye[k] * c[3, 0] * x for k in range(3)]
+    w_col = c[3, 1] * y + c[3, 2] + c[3, 3]
+    d_col = [c[k, 1] * y + c[k, 2] + c[k, 3] - eye[k] * w_col for k in range(3)]
+    # only rows with a descending ray (d_z / w < 0 at either end: both are linear along a row)
+    ends = [(d_col[2] + d_row[2][j]) / (w_col + w_row[j]) for j in (0, -1)]
+    rows = np.flatnonzero((ends[0] < 0) | (ends[1] < 0))
+    w = _outer_sum(w_col[rows], w_row)
+    d = [_outer_sum(col[rows], row) for col, row in zip(d_col, d_row, strict=True)]
+    r = np.float32(-eye[2]) / d[2]  # the ray meets z = 0 at eye + r * d
+    s = r * w  # ... this far along the ray to the far plane (eye depth s * far)
+    hx, hy = floor.half_extents
+    seen = (
+        (s >= near / far)
+        & (s <= 1.0)
+        & (np.abs(eye[0] + r * d[0]) <= hx)
+        & (np.abs(eye[1] + r * d[1]) <= hy)
+    )
+    depth = np.ones((height, width), dtype=np.float32)
+    floor_depth = (far - near / np.where(seen, s, 1.0)) / (far - near)  # as pybullet's buffer
+    depth[rows] = np.where(seen, floor_depth, 1.0)
+    return depth
+
+
+def _outer_sum(column: FloatArray, row: FloatArray) -> NDArray[np.float32]:
+    """The grid (H, W) ``column[:, None] + row[None, :]`` in float32."""
+    return np.add.outer(column.astype(np.float32), row.astype(np.float32))
 
 
 def _simple_ccw_polygon(points: FloatArray) -> FloatArray:
