@@ -12,8 +12,13 @@ and of perception (everything from the frame to the pose), and their ratio.
 
     python benchmarks/no_poles_patrols.py            # ~6 min on one core
     python benchmarks/no_poles_patrols.py --episodes 2
+    python benchmarks/no_poles_patrols.py --env SPL/ActiveVision-NoPoles-v1 \
+        --set perception.odometry=visual --set perception.field_end=bag_of_words
 
-Writes ``no_poles_patrols.json`` and ``.md`` to ``--out`` (``benchmarks/results``).
+Writes ``no_poles_patrols.json`` and ``.md`` to ``--out`` (``benchmarks/results``); with
+``--set KEY=VALUE`` overrides (``gym.make`` keyword arguments, each env's; the value parsed as
+JSON where it parses, else kept as a string) the files are named after them, e.g.
+``no_poles_patrols_perception.odometry=visual.json``.
 """
 
 from __future__ import annotations
@@ -61,12 +66,15 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=100)
     parser.add_argument("--episode-s", type=float, default=60.0)
     parser.add_argument("--out", type=Path, default=RESULTS)
+    parser.add_argument("--env", action="append", choices=ENV_IDS, help="default: both")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     args = parser.parse_args()
+    overrides = dict(_override(item) for item in args.set)
     torch.set_num_threads(1)
     t0 = time.perf_counter()
     rows = []
-    for env_id in ENV_IDS:
-        env = gym.make(env_id, episode_s=args.episode_s)
+    for env_id in args.env or ENV_IDS:
+        env = gym.make(env_id, episode_s=args.episode_s, **overrides)
         policy = load_policy("scan", env.get_wrapper_attr("config"))
         episodes, timings = [], []
         for k in range(args.episodes):
@@ -91,13 +99,26 @@ def main() -> None:
         "seeds": [args.seed + k for k in range(args.episodes)],
         "episode_s": args.episode_s,
         "policy": "scan",
+        "overrides": overrides,
         "rows": rows,
         "seconds": time.perf_counter() - t0,
     }
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "no_poles_patrols.json").write_text(json.dumps(result, indent=1))
-    (args.out / "no_poles_patrols.md").write_text(markdown(result))
+    name = "_".join(["no_poles_patrols", *sorted(args.set)])
+    (args.out / f"{name}.json").write_text(json.dumps(result, indent=1))
+    (args.out / f"{name}.md").write_text(markdown(result))
     print(markdown(result))
+
+
+def _override(item: str) -> tuple[str, Any]:
+    """``KEY=VALUE`` as a ``gym.make`` keyword: the value parsed as JSON, else the string."""
+    key, sep, text = item.partition("=")
+    if not sep or not key:
+        raise SystemExit(f"--set takes KEY=VALUE, got {item!r}")
+    try:
+        return key, json.loads(text)
+    except json.JSONDecodeError:
+        return key, text
 
 
 def markdown(result: dict[str, Any]) -> str:
@@ -105,6 +126,7 @@ def markdown(result: dict[str, Any]) -> str:
     lines = [
         f"# One-minute patrols with and without poles (head scan, seeds {result['seeds']})",
         "",
+        *([f"Overrides: {result['overrides']}", ""] if result["overrides"] else []),
         "| env | position error (m) | odometry alone (m) | pose NEES | render ms | "
         "perception ms | perception / render |",
         "|---|---|---|---|---|---|---|",

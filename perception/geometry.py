@@ -13,6 +13,8 @@ yaw turns the head left, positive pitch tilts it down.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -23,6 +25,12 @@ def wrap_angle(angle: ArrayLike) -> FloatArray:
     """Wrap angles (rad, any shape) into [-pi, pi)."""
     a = np.asarray(angle, dtype=np.float64)
     return (a + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def wrap_scalar(angle: float) -> float:
+    """:func:`wrap_angle` of one angle (rad) as a Python float, into [-pi, pi): the same
+    arithmetic (Python's float remainder is NumPy's), without the array's overhead."""
+    return (float(angle) + math.pi) % (2.0 * math.pi) - math.pi
 
 
 def compose(a: ArrayLike, b: ArrayLike) -> FloatArray:

@@ -67,7 +67,7 @@ import numpy as np
 from perception.field.features import AXIAL_KINDS, FEATURE_KINDS, FeatureKind, FieldFeature
 from perception.field.field_map import FieldMap, MapFeature
 from perception.field.pose_observation import PoseObservation
-from perception.geometry import FloatArray, wrap_angle
+from perception.geometry import FloatArray, wrap_angle, wrap_scalar
 from perception.validation import (
     InvalidTypeError,
     check_choice,
@@ -78,6 +78,9 @@ from perception.validation import (
 
 _J = np.array([[0.0, -1.0], [1.0, 0.0]])  # a quarter turn: d Rot(a) / da at a = 0
 _BOTH = np.ones(2)  # a point pair's mask: both components counted
+_X_AXIS, _Y_AXIS = np.array([1.0, 0.0]), np.array([0.0, 1.0])  # the unit axes (read-only)
+for _axis in (_BOTH, _X_AXIS, _Y_AXIS):
+    _axis.flags.writeable = False
 MatchOrder = Literal["seed", "candidates"]
 MATCH_ORDERS: tuple[MatchOrder, ...] = ("seed", "candidates")
 Starts = Literal["prior", "hypotheses"]
@@ -166,18 +169,33 @@ class MatchItem:
         return min(self.distances_m)
 
     @cached_property
-    def targets(self) -> tuple[tuple[FloatArray, FloatArray], ...]:
-        """Per feature: its candidates' points (C, P, 2) and directions (C,) (NaN: none),
-        stacked once for :func:`_nearest`."""
+    def targets(self) -> tuple[_Targets, ...]:
+        """Per feature: its candidates stacked once for :func:`_nearest`."""
         return tuple(
-            (
-                np.array([c[i].points for c in self.candidates]),
-                np.array(
-                    [np.nan if c[i].direction is None else c[i].direction for c in self.candidates]
-                ),
-            )
-            for i in range(len(self.features))
+            _Targets.of([c[i] for c in self.candidates]) for i in range(len(self.features))
         )
+
+
+@dataclass(frozen=True)
+class _Targets:
+    """One feature's C candidates, stacked: their ``points`` (C, P, 2) and ``directions``
+    (C,) (NaN: none), and, as segments from their first point, ``spans`` (C, 2) to the
+    second point and the spans' squared lengths ``span_sq`` (C,) (lines: P = 2)."""
+
+    points: FloatArray
+    directions: FloatArray
+    spans: FloatArray
+    span_sq: FloatArray
+
+    @classmethod
+    def of(cls, candidates: list[MapFeature]) -> _Targets:
+        """The stacked ``candidates`` (map features of one kind)."""
+        points = np.array([c.points for c in candidates])
+        directions = np.array([np.nan if c.direction is None else c.direction for c in candidates])
+        if points.shape[1] < 2:
+            return cls(points, directions, np.zeros((len(points), 2)), np.zeros(len(points)))
+        spans = points[:, 1] - points[:, 0]
+        return cls(points, directions, spans, np.einsum("ci,ci->c", spans, spans))
 
 
 @dataclass(frozen=True)
@@ -247,8 +265,11 @@ def _icp(items: list[MatchItem], start: FloatArray, config: SensorModelConfig) -
     for iteration in range(1, config.max_iterations + 1):
         included = items[: min(iteration, len(items))]
         chosen = [_nearest(item, pose, config) for item in included]
-        pose = _step(pose, _point_pairs(included, chosen, pose, config))
-        errors.append(_error(pose, _point_pairs(included, chosen, pose, config)))
+        pairs = _point_pairs(included, chosen, pose, config)
+        pose = _step(pose, pairs)
+        if _turn_with_pose(included, chosen):  # the pairs at the new pose differ: made again
+            pairs = _point_pairs(included, chosen, pose, config)
+        errors.append(_error(pose, pairs))
         if len(included) == len(items) and (
             errors[-1] < config.converged_rms_m**2
             or (len(errors) >= 3 and errors[-1] >= min(errors[-3], errors[-2]))
@@ -259,7 +280,7 @@ def _icp(items: list[MatchItem], start: FloatArray, config: SensorModelConfig) -
 
 def _pose_distance(a: FloatArray, b: FloatArray, config: SensorModelConfig) -> float:
     """Position distance plus the heading difference in metres (``direction_scale``)."""
-    heading = abs(float(wrap_angle(a[2] - b[2])))
+    heading = abs(wrap_scalar(a[2] - b[2]))
     return float(np.linalg.norm(a[:2] - b[:2])) + config.direction_scale_m_per_rad * heading
 
 
@@ -372,7 +393,7 @@ def _segment_angle(points: FloatArray) -> float:
 
 def _axial_difference(a: float, b: float) -> float:
     """|a - b| modulo pi, in [0, pi/2]."""
-    return abs(float(wrap_angle(2.0 * (a - b)))) / 2.0
+    return abs(wrap_scalar(2.0 * (a - b))) / 2.0
 
 
 def _line_gap(a: FloatArray, b: FloatArray) -> float:
@@ -535,11 +556,11 @@ def _place(pose: FloatArray, points: FloatArray) -> FloatArray:
     return points @ np.array([[c, s], [-s, c]]) + pose[:2]
 
 
-def _segment_distances(points: FloatArray, segments: FloatArray) -> FloatArray:
-    """Distances (P, C) from each of ``points`` (P, 2) to each of ``segments`` (C, 2, 2)."""
-    a, d = segments[:, 0], segments[:, 1] - segments[:, 0]
+def _segment_distances(points: FloatArray, segments: _Targets) -> FloatArray:
+    """Distances (P, C) from each of ``points`` (P, 2) to each of the C ``segments``."""
+    a, d = segments.points[:, 0], segments.spans
     offsets = points[:, None] - a  # (P, C, 2)
-    t = np.clip(np.einsum("pci,ci->pc", offsets, d) / np.einsum("ci,ci->c", d, d), 0.0, 1.0)
+    t = np.clip(np.einsum("pci,ci->pc", offsets, d) / segments.span_sq, 0.0, 1.0)
     gaps = points[:, None] - (a + t[..., None] * d)
     return np.hypot(gaps[..., 0], gaps[..., 1])
 
@@ -549,19 +570,20 @@ def _costs(item: MatchItem, pose: FloatArray, config: SensorModelConfig) -> Floa
     ends' distances to the map segment; a point's distance plus its direction's difference
     times ``direction_scale_m_per_rad`` (modulo pi for an axial one)."""
     total = np.zeros(len(item.candidates))
-    for feature, (points, directions) in zip(item.features, item.targets, strict=True):
+    for feature, targets in zip(item.features, item.targets, strict=True):
         placed = _place(pose, feature.points)
         if feature.kind == "line":
-            total += _segment_distances(placed, points).sum(axis=0)
+            total += _segment_distances(placed, targets).sum(axis=0)
             continue
-        total += np.hypot(*(placed[0] - points[:, 0]).T)
+        total += np.hypot(*(placed[0] - targets.points[:, 0]).T)
         if feature.direction is not None:
-            turn = feature.direction + pose[2] - directions
+            turn = feature.direction + pose[2] - targets.directions
             if feature.kind in AXIAL_KINDS:
                 gap = np.abs(wrap_angle(2.0 * turn)) / 2
             else:
                 gap = np.abs(wrap_angle(turn))
-            total += config.direction_scale_m_per_rad * np.nan_to_num(gap, nan=0.0)
+            # a candidate without a direction (NaN) adds nothing (``gap`` is never infinite)
+            total += config.direction_scale_m_per_rad * np.where(np.isnan(gap), 0.0, gap)
     return total
 
 
@@ -602,12 +624,12 @@ def _implied_pose(
     else:
         feature, target = seen[0], candidate[0]
         heading = _direction(target) - _direction(feature)
-        if feature.kind in AXIAL_KINDS and abs(float(wrap_angle(heading - pose[2]))) > math.pi / 2:
+        if feature.kind in AXIAL_KINDS and abs(wrap_scalar(heading - pose[2])) > math.pi / 2:
             heading += math.pi
         anchor, mapped = feature.points[0], target.points[0]
     c, s = math.cos(heading), math.sin(heading)
     position = mapped - np.array([[c, -s], [s, c]]) @ anchor
-    return np.array([position[0], position[1], float(wrap_angle(heading))])
+    return np.array([position[0], position[1], wrap_scalar(heading)])
 
 
 def _unit(angle: float) -> FloatArray:
@@ -656,7 +678,7 @@ def _point_pairs(
             if feature.direction is not None and target.direction is not None:
                 arm = config.junction_arm_m
                 towards = target.direction
-                gap = abs(float(wrap_angle(feature.direction + pose[2] - towards)))
+                gap = abs(wrap_scalar(feature.direction + pose[2] - towards))
                 if feature.kind in AXIAL_KINDS and gap > math.pi / 2:
                     towards += math.pi  # the map direction nearer the placed one
                 robot.append(feature.points[0] + arm * _unit(feature.direction))
@@ -664,6 +686,19 @@ def _point_pairs(
                 mask.append(_BOTH)
                 w.append(weight)
     return _Pairs(np.array(robot), np.array(q), np.array(mask), np.array(w))
+
+
+def _turn_with_pose(items: list[MatchItem], chosen: list[tuple[MapFeature, ...]]) -> bool:
+    """Whether the :func:`_point_pairs` of ``items`` matched to ``chosen`` depend on the pose:
+    only an axial feature's arm does (its map direction, or the opposite one, whichever is
+    nearer the placed feature's); every other pair is the same at any pose."""
+    return any(
+        feature.kind in AXIAL_KINDS
+        and feature.direction is not None
+        and target.direction is not None
+        for item, targets in zip(items, chosen, strict=True)
+        for feature, target in zip(item.features, targets, strict=True)
+    )
 
 
 def _step(pose: FloatArray, pairs: _Pairs) -> FloatArray:
@@ -683,7 +718,7 @@ def _step(pose: FloatArray, pairs: _Pairs) -> FloatArray:
     t_x, t_y, dtheta = np.linalg.lstsq(rows[counted], targets[counted], rcond=None)[0]
     c, s = math.cos(dtheta), math.sin(dtheta)
     turned = centre + np.array([[c, -s], [s, c]]) @ (pose[:2] - centre) + np.array([t_x, t_y])
-    return np.array([turned[0], turned[1], float(wrap_angle(pose[2] + dtheta))])
+    return np.array([turned[0], turned[1], wrap_scalar(pose[2] + dtheta)])
 
 
 def _error(pose: FloatArray, pairs: _Pairs) -> float:
@@ -763,4 +798,4 @@ def _weight(distance_m: float, config: SensorModelConfig) -> float:
 def _across(target: MapFeature) -> FloatArray:
     """The unit axis (2,) across a map line: y for a line along x, x for one along y."""
     along = target.points[1] - target.points[0]
-    return np.array([0.0, 1.0]) if abs(along[0]) > abs(along[1]) else np.array([1.0, 0.0])
+    return _Y_AXIS if abs(along[0]) > abs(along[1]) else _X_AXIS

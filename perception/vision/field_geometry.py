@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 from typing import Literal
 
 import numpy as np
@@ -112,6 +112,16 @@ def _tls(points: FloatArray) -> tuple[FloatArray, FloatArray]:
     return centre, np.asarray(vt[0], dtype=np.float64)
 
 
+@lru_cache(maxsize=8)
+def _hough_trig(theta_step_rad: float) -> FloatArray:
+    """(2, T) cosines and sines of the Hough angles ``0, theta_step_rad, ...`` below pi
+    (read-only: one table per step, shared by every call)."""
+    thetas = np.arange(0.0, math.pi, theta_step_rad)
+    trig = np.vstack([np.cos(thetas), np.sin(thetas)])
+    trig.flags.writeable = False
+    return trig
+
+
 def image_lines(
     points: FloatArray,
     *,
@@ -138,18 +148,19 @@ def image_lines(
     votes or after ``max_peaks`` peaks.
     """
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-    thetas = np.arange(0.0, math.pi, theta_step_rad)
-    trig = np.vstack([np.cos(thetas), np.sin(thetas)])  # (2, T)
-    rho_max = float(np.abs(pts).sum(axis=1).max()) + rho_step_px if len(pts) else 0.0
+    if len(pts) < min_points:  # no peak can have enough votes
+        return []
+    trig = _hough_trig(theta_step_rad)  # (2, T)
+    rho_max = float(np.abs(pts).sum(axis=1).max()) + rho_step_px
     n_rho = math.ceil(2 * rho_max / rho_step_px) + 1
     # each point's accumulator cells (N, T); a point leaving the pool takes its votes back
     cells = pts @ trig
     cells += rho_max
     cells /= rho_step_px
     np.rint(cells, out=cells)
-    cells += n_rho * np.arange(len(thetas), dtype=np.float64)  # exact: small whole numbers
+    cells += n_rho * np.arange(trig.shape[1], dtype=np.float64)  # exact: small whole numbers
     bins = cells.astype(np.intp)
-    votes = np.bincount(bins.ravel(), minlength=n_rho * len(thetas))
+    votes = np.bincount(bins.ravel(), minlength=n_rho * trig.shape[1])
     remaining = np.arange(len(pts))
     out: list[ImageLine] = []
     for _ in range(max_peaks):

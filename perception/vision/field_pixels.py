@@ -24,8 +24,9 @@ the plane z = 0, found by turning each pixel's ray with :meth:`CameraState.rotat
   (:func:`best_splits`, which :mod:`perception.vision.robots`' field boundary shares and
   gives an envelope).
 - Mask helpers: :func:`row_runs` and :func:`run_pixels` (runs of a mask along its rows, the
-  pixels of runs) and :func:`rows_from` (the rows below a per-column limit such as
-  :func:`horizon_rows`), also used by :mod:`perception.vision.robots`; :func:`hsv_mask` and
+  pixels of runs), :func:`transposed` (a mask's columns as rows, for column scans) and
+  :func:`rows_from` (the rows below a per-column limit such as :func:`horizon_rows`), also
+  used by :mod:`perception.vision.robots`; :func:`hsv_mask` and
   :func:`masked_median` (colour masks and a channel's median over one).
 - :func:`blobs`, :func:`ground_extent`: small white components ringed by green and their
   size on the ground (penalty marks); :func:`post_feet`: the feet of tall, narrow white
@@ -112,6 +113,17 @@ class GroundProjection:
             dtype=np.float64,
         )
 
+    def slopes(self, pixels: FloatArray, axes: NDArray[np.intp]) -> FloatArray:
+        """(N, 2) ``d(x, y)/du`` or ``d(x, y)/dv`` m/px at ``pixels`` (N, 2), each along its own
+        image axis ``axes`` (N,) (0: u, 1: v): that column of :meth:`jacobians`, to the last
+        bit, at half the projections."""
+        uv = np.asarray(pixels, dtype=np.float64).reshape(-1, 2)
+        step = np.zeros_like(uv)
+        step[np.arange(len(uv)), axes] = JACOBIAN_STEP_PX
+        ahead, _ = self.points(uv + step)
+        behind, _ = self.points(uv - step)
+        return np.asarray((ahead - behind) / (2 * JACOBIAN_STEP_PX), dtype=np.float64)
+
     def covariances(self, pixels: FloatArray, pixel_std_px: float) -> FloatArray:
         """(N, 2, 2) covariance (m²) of the ground points at ``pixels`` (N, 2) for independent
         noise of ``pixel_std_px`` on each image axis, to first order; NaN at the horizon."""
@@ -183,6 +195,15 @@ def row_runs(mask: BoolImage) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArr
     return rows, changes[0::2] - first, changes[1::2] - first
 
 
+def transposed(mask: BoolImage) -> BoolImage:
+    """``mask`` (H, W) transposed, (W, H) and contiguous: OpenCV's transpose, many times faster
+    than NumPy's copy of a transposed view (which the column scans would otherwise make)."""
+    if not mask.size:
+        return np.zeros(mask.shape[::-1], dtype=bool)
+    flipped = cv2.transpose(np.ascontiguousarray(mask).view(np.uint8))
+    return np.asarray(flipped).view(np.bool_)
+
+
 def _beside(
     padded: BoolImage, rows: NDArray[np.intp], cols: NDArray[np.intp], sign: int, gap: int
 ) -> NDArray[np.bool_]:
@@ -220,7 +241,7 @@ def line_runs(
     whose middles lie on the ground within ``max_range_m`` of the robot."""
     height, width = white.shape
     rows, starts, ends = _green_ended_runs(white, green, green_gap_px)
-    cols, tops, bottoms = _green_ended_runs(white.T, green.T, green_gap_px)
+    cols, tops, bottoms = _green_ended_runs(transposed(white), transposed(green), green_gap_px)
     uv = np.concatenate(
         [
             np.column_stack([0.5 * (starts + ends - 1), rows]),
@@ -233,8 +254,7 @@ def line_runs(
     run_px = np.concatenate([ends - starts, bottoms - tops])
     xy, hit = projection.points(uv)
     hit &= np.hypot(xy[:, 0], xy[:, 1]) <= max_range_m
-    jac = projection.jacobians(uv[hit])
-    along = np.where(in_row[hit, None], jac[:, :, 0], jac[:, :, 1])  # m per pixel on
+    along = projection.slopes(uv[hit], np.where(in_row[hit], 0, 1))  # m per pixel on
     limit = width_factor * line_width_m / np.hypot(along[:, 0], along[:, 1]) + slack_px
     keep = np.flatnonzero(hit)[run_px[hit] <= limit]
     mask = np.zeros(height * width, dtype=bool)
@@ -286,13 +306,14 @@ def best_splits(carpet: BoolImage) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
     non-carpet pixels from it down, and that count (W,) each."""
     height, width = carpet.shape
     # (W + 1, H + 1) integral image of the columns: carpet above each row, summed over columns
-    summed = cv2.integral(np.ascontiguousarray(carpet.T).view(np.uint8))
+    summed = cv2.integral(transposed(carpet).view(np.uint8))
     above = np.diff(summed, axis=0)  # (W, H + 1): carpet of each column above each row
-    below = above[:, -1:] - above[:, :-1]  # (W, H): carpet from each row down ...
-    below *= 2
-    below -= np.arange(height, 0, -1, dtype=below.dtype)  # ... less all pixels from it down
-    best = np.argmax(below, axis=1)
-    return best, below[np.arange(width), best]
+    # carpet less the rest from row r down is 2 (above[H] - above[r]) - (H - r): the column's
+    # constant 2 above[H] - H plus r - 2 above[r], whose argmax (the first of equals) it shares
+    key = np.arange(height, dtype=above.dtype) - 2 * above[:, :-1]  # (W, H)
+    best = np.argmax(key, axis=1)
+    score = 2 * (above[:, -1] - above[np.arange(width), best]) - (height - best)
+    return best, score.astype(above.dtype)
 
 
 def carpet_top(carpet: BoolImage) -> FloatArray:
@@ -404,7 +425,7 @@ def post_feet(
     grey robot under its wider body).
     """
     height, width = white.shape
-    cols, tops, ends = row_runs(white.T)
+    cols, tops, ends = row_runs(transposed(white))
     below = np.zeros(len(cols), dtype=bool)
     for k in (0, 1):
         r = ends + k

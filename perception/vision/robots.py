@@ -71,7 +71,9 @@ Known limits: a ball or another object just in front of a robot's feet moves its
 (ranged too near); robots side by side at one range without distinct jerseys merge (too
 wide); a robot touching ours fills the image and is ranged at the image bottom.
 
-Speed: one HSV conversion of the sampled columns, and of each candidate's box and windows.
+Speed: one HSV conversion and one white and one carpet-hue mask of the whole image per frame;
+the sampled columns, each candidate's box and its windows are views of them (copying a strided
+strip of pixels costs more than converting the whole image).
 """
 
 from __future__ import annotations
@@ -88,7 +90,13 @@ from perception.geometry import FloatArray, pixel_rays, project_points, ray_grou
 from perception.types import CameraModel, CameraState, RobotSighting
 from perception.validation import check_in_interval, check_int, check_positive
 from perception.vision.colour_filter import HsvRange, check_hsv_range
-from perception.vision.field_pixels import best_splits, row_runs, rows_from, run_pixels
+from perception.vision.field_pixels import (
+    best_splits,
+    row_runs,
+    rows_from,
+    run_pixels,
+    transposed,
+)
 from perception.vision.ground_point import ground_point, height_point, range_bearing_cov
 
 """Inclusive ``((h, s, v) low, (h, s, v) high)`` bounds, OpenCV convention (H 0-179)."""
@@ -309,6 +317,18 @@ class RobotCandidate:
 
 
 @dataclass(frozen=True)
+class _Colours:
+    """One image in HSV ``hsv`` (H, W, 3) uint8 and its ``white`` and carpet-``hued`` masks
+    (H, W) (``white_hsv``; ``green_hsv`` at any saturation up to its ceiling), each made once
+    per frame: the conversion and the masks are per pixel, so any window of them is that
+    window's own."""
+
+    hsv: NDArray[np.uint8]
+    white: NDArray[np.bool_]
+    hued: NDArray[np.bool_]
+
+
+@dataclass(frozen=True)
 class _Cluster:
     """A colour cluster: pixel count, pixel box ``(u0, v0, u1, v1)`` (search coordinates,
     exclusive ends) and the (2,) camera-coordinate point of its lower edge at its centre
@@ -355,25 +375,36 @@ class RobotDetector:
 
     def candidates(self, image: NDArray[np.uint8], state: CameraState) -> list[RobotCandidate]:
         """Every indent of ``image`` with Algorithm 2's verdict (for inspection and tuning)."""
-        self._check_image(image)
-        boundary = self.field_boundary(image, state)
+        colours = self._colours(image)
+        boundary = self._boundary(colours, state)
         step, last = self.config.column_step_px, self.camera.width - 1
         out: list[RobotCandidate] = []
         for k0, k1 in self._groups(boundary, state):
-            out += self._examine(image, state, boundary, k0 * step, min((k1 + 1) * step - 1, last))
+            u0, u1 = k0 * step, min((k1 + 1) * step - 1, last)
+            out += self._examine(colours, state, boundary, u0, u1)
         return out
 
     def field_boundary(self, image: NDArray[np.uint8], state: CameraState) -> FieldBoundary:
         """Step 1 and the scans of step 2: the carpet's top edge and each column's indent."""
+        return self._boundary(self._colours(image), state)
+
+    def _colours(self, image: NDArray[np.uint8]) -> _Colours:
+        """The :class:`_Colours` of ``image`` (H, W, 3) uint8 RGB; ``ValueError`` if it is not
+        of the camera's size."""
         self._check_image(image)
+        hsv = np.asarray(cv2.cvtColor(image, cv2.COLOR_RGB2HSV), dtype=np.uint8)
+        return _Colours(hsv, _in_range(hsv, self._white), _in_range(hsv, self._green_hued))
+
+    def _boundary(self, colours: _Colours, state: CameraState) -> FieldBoundary:
+        """:meth:`field_boundary` of the image of ``colours``."""
         cfg = self.config
         height = self.camera.height
         columns = self._columns
-        strip = np.ascontiguousarray(image[:, self._sampled])
-        hsv = np.asarray(cv2.cvtColor(strip, cv2.COLOR_RGB2HSV), dtype=np.uint8)
-        floor = self._saturation_floor(hsv)
-        green = self._carpet_green(hsv, floor)  # (H, C)
-        white = np.asarray(cv2.inRange(hsv, *self._white), dtype=bool)
+        sampled = colours.hsv[:, self._sampled]  # (H, C, 3), a view
+        floor = self._saturation_floor(sampled)
+        hued = colours.hued[:, self._sampled]
+        green = _carpet_green(hued, sampled[..., 1], floor)  # (H, C)
+        white = colours.white[:, self._sampled]
         line_limit, row_distance = self._line_limits(state)
         green |= white & _thin_runs(white, line_limit)  # field lines are carpet here
         green &= rows_from(self._horizon_rows(state, columns) - cfg.horizon_margin_px, height)
@@ -411,7 +442,8 @@ class RobotDetector:
         enough = count >= cfg.min_glare_samples
         median = np.full(hsv.shape[1], np.inf)
         if enough.any():  # each column's hued saturations first (255: none can sort after it)
-            ranked = np.sort(np.where(hued, lower[..., 1], 255).T[enough], axis=1)
+            saturations = np.where(hued, lower[..., 1], np.uint8(255)).T[enough]  # (C', H') uint8
+            ranked = np.sort(saturations, axis=1, kind="stable")  # a radix sort for uint8
             n, rows = count[enough], np.arange(int(enough.sum()))
             middle = ranked[rows, (n - 1) // 2].astype(np.float64) + ranked[rows, n // 2]
             median[enough] = middle / 2.0  # the middle one, or the mean of the middle two
@@ -419,13 +451,6 @@ class RobotDetector:
             cfg.glare_saturation_ratio * median, cfg.min_green_saturation, s_lo
         )
         return floor
-
-    def _carpet_green(self, hsv: NDArray[np.uint8], floor: FloatArray) -> NDArray[np.bool_]:
-        """Pixels (H, W) of ``hsv`` (H, W, 3) in ``green_hsv`` with the saturation floor
-        ``floor`` (W,) per column instead of its own."""
-        least = np.ceil(floor).astype(np.uint8)  # whole saturations: s >= floor iff s >= this
-        hued = np.asarray(cv2.inRange(hsv, *self._green_hued), dtype=bool)
-        return hued & (hsv[..., 1] >= least[None, :])
 
     # ----- steps --------------------------------------------------------------------------
     def _line_limits(self, state: CameraState) -> tuple[FloatArray, FloatArray]:
@@ -581,14 +606,15 @@ class RobotDetector:
 
     def _examine(
         self,
-        image: NDArray[np.uint8],
+        colours: _Colours,
         state: CameraState,
         boundary: FieldBoundary,
         u0: int,
         u1: int,
         split: bool = True,
     ) -> list[RobotCandidate]:
-        """Algorithm 2 (lines 3-13, 18) on the indent over image columns ``u0..u1``.
+        """Algorithm 2 (lines 3-13, 18) on the indent over image columns ``u0..u1`` of the
+        image of ``colours``.
 
         With ``split``, a box wider than ``split_width_ratio`` robots that holds several
         jerseys side by side is split between them and each part examined on its own.
@@ -603,11 +629,10 @@ class RobotDetector:
             return []
         # carpet: green, or white in runs no longer than a field line (computed from the image
         # top, so that runs through the boundary keep their length)
-        window = np.ascontiguousarray(image[: v1 + 1, u0 : u1 + 1])
-        hsv = np.asarray(cv2.cvtColor(window, cv2.COLOR_RGB2HSV), dtype=np.uint8)
-        white = np.asarray(cv2.inRange(hsv, *self._white), dtype=bool)
+        window = np.s_[: v1 + 1, u0 : u1 + 1]
+        white = colours.white[window]
         floor = np.interp(np.arange(u0, u1 + 1), boundary.columns, boundary.saturation_floor)
-        green = self._carpet_green(hsv, floor)
+        green = _carpet_green(colours.hued[window], colours.hsv[window][..., 1], floor)
         green = (green | (white & _thin_runs(white, boundary.line_limit[: v1 + 1])))[v0:]
         # line 3: shrink the bottom and sides while mostly green
         top, bottom, left, right = 0, green.shape[0] - 1, 0, green.shape[1] - 1
@@ -660,15 +685,15 @@ class RobotDetector:
             return reject("above_horizon")
         width_px = u1 - u0 + 1.0
         if split and width_px > cfg.split_width_ratio * cam.fx * cfg.robot_width_m / depth:
-            parts = self._jersey_split(image, state, at_base, (u0, u1), v1, cut, depth)
+            parts = self._jersey_split(colours.hsv, state, at_base, (u0, u1), v1, cut, depth)
             if len(parts) > 1:
                 return [
                     c
                     for a, b in parts
-                    for c in self._examine(image, state, boundary, a, b, split=False)
+                    for c in self._examine(colours, state, boundary, a, b, split=False)
                 ]
         # lines 6-7: the waistband's colour, searched where a standing robot shows its body
-        waist = self._waistband(image, state, at_base, (u0, u1), v1, cut, depth)
+        waist = self._waistband(colours.hsv, state, at_base, (u0, u1), v1, cut, depth)
         team = None if waist is None else waist[0]
         pixel, height_m, beyond_m = base, 0.0, cfg.centre_offset_m
         range_m, bearing = at_base
@@ -706,7 +731,7 @@ class RobotDetector:
             return verdict("narrow_m")
         # not in the seed: every landmark pole (0.1 m thick) carries a pink band, no robot does
         if width_m < cfg.pole_max_width_m and self._pole_colour(
-            image, state, located, (u0, u1), v1
+            colours.hsv, state, located, (u0, u1), v1
         ):
             return verdict("pole")
         # not in the seed: a narrow white column without a jersey is a goal post (or the
@@ -725,7 +750,7 @@ class RobotDetector:
 
     def _waistband(
         self,
-        image: NDArray[np.uint8],
+        hsv: NDArray[np.uint8],
         state: CameraState,
         at_base: tuple[float, float],
         cols: tuple[int, int],
@@ -751,7 +776,7 @@ class RobotDetector:
         max_width = cfg.team_max_width * size
         for team, ranges in enumerate(self._teams):
             found = self._cluster(
-                image, rows, window, ranges, cfg.min_waistband_px, max_width, inner, min_rows
+                hsv, rows, window, ranges, cfg.min_waistband_px, max_width, inner, min_rows
             )
             if found is not None and (best is None or found.area > best[1].area):
                 best = (team, found)
@@ -759,7 +784,7 @@ class RobotDetector:
 
     def _jersey_split(
         self,
-        image: NDArray[np.uint8],
+        hsv: NDArray[np.uint8],
         state: CameraState,
         at_base: tuple[float, float],
         cols: tuple[int, int],
@@ -779,11 +804,11 @@ class RobotDetector:
         c0, c1 = cols
         if r1 < r0:
             return [cols]
-        hsv = cv2.cvtColor(np.ascontiguousarray(image[r0 : r1 + 1, c0 : c1 + 1]), cv2.COLOR_RGB2HSV)
-        mask = np.zeros(hsv.shape[:2], dtype=np.uint8)
+        window = hsv[r0 : r1 + 1, c0 : c1 + 1]
+        mask = np.zeros(window.shape[:2], dtype=np.uint8)
         for ranges in self._teams:
             for lo, hi in ranges:
-                mask |= np.asarray(cv2.inRange(hsv, lo, hi), dtype=np.uint8)
+                mask |= np.asarray(cv2.inRange(window, lo, hi), dtype=np.uint8)
         _, _, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
         robot_px = cam.fx * cfg.robot_width_m / depth
         x, w, area = (stats[1:, i] for i in (cv2.CC_STAT_LEFT, cv2.CC_STAT_WIDTH, cv2.CC_STAT_AREA))
@@ -816,7 +841,7 @@ class RobotDetector:
 
     def _pole_colour(
         self,
-        image: NDArray[np.uint8],
+        hsv: NDArray[np.uint8],
         state: CameraState,
         at_base: tuple[float, float],
         cols: tuple[int, int],
@@ -841,7 +866,7 @@ class RobotDetector:
         window = self._window(cols, width + 2.0)  # the band leans with the camera's roll
         lo, hi = cfg.pole_band_ratio
         for colour in self._pole:
-            found = self._cluster(image, rows, window, [colour], cfg.pole_min_px, 1.5 * width, cols)
+            found = self._cluster(hsv, rows, window, [colour], cfg.pole_min_px, 1.5 * width, cols)
             if found is None:
                 continue
             x0, y0, x1, y1 = found.box
@@ -861,7 +886,7 @@ class RobotDetector:
 
     def _cluster(
         self,
-        image: NDArray[np.uint8],
+        hsv: NDArray[np.uint8],
         rows: tuple[int, int],
         cols: tuple[int, int],
         ranges: list[tuple[NDArray[np.uint8], ...]],
@@ -871,7 +896,7 @@ class RobotDetector:
         min_rows: int = 1,
     ) -> _Cluster | None:
         """The largest cluster of the colour ``ranges`` (HSV bounds) in the window of ``rows``
-        and ``cols`` (inclusive pixel ranges).
+        and ``cols`` (inclusive pixel ranges) of the image whose HSV is ``hsv`` (H, W, 3).
 
         Only pixels in vertical runs of ``min_rows`` or more count (a thin stripe of a poster
         behind does not join a jersey to the rest of the poster). A cluster counts if it has
@@ -883,11 +908,10 @@ class RobotDetector:
         (r0, r1), (c0, c1) = rows, cols
         if r1 < r0 or c1 < c0:
             return None
-        window = np.ascontiguousarray(image[r0 : r1 + 1, c0 : c1 + 1])
-        hsv = cv2.cvtColor(window, cv2.COLOR_RGB2HSV)
-        mask = np.zeros(hsv.shape[:2], dtype=np.uint8)
+        window = hsv[r0 : r1 + 1, c0 : c1 + 1]
+        mask = np.zeros(window.shape[:2], dtype=np.uint8)
         for lo, hi in ranges:
-            mask |= np.asarray(cv2.inRange(hsv, lo, hi), dtype=np.uint8)
+            mask |= np.asarray(cv2.inRange(window, lo, hi), dtype=np.uint8)
         if min_rows > 1:
             kernel = np.ones((min_rows, 1), dtype=np.uint8)
             mask = np.asarray(cv2.morphologyEx(mask, cv2.MORPH_OPEN, kernel), dtype=np.uint8)
@@ -961,11 +985,26 @@ class RobotDetector:
         return total
 
 
+def _in_range(hsv: NDArray[np.uint8], bounds: tuple[NDArray[np.uint8], ...]) -> NDArray[np.bool_]:
+    """Pixels (H, W) of ``hsv`` (H, W, 3; rows may be a window's, pixels contiguous) within the
+    inclusive ``bounds`` (low, high) (3,) each."""
+    return np.asarray(cv2.inRange(hsv, *bounds), dtype=bool)
+
+
+def _carpet_green(
+    hued: NDArray[np.bool_], saturation: NDArray[np.uint8], floor: FloatArray
+) -> NDArray[np.bool_]:
+    """Carpet green (H, W): the ``hued`` pixels (H, W) (``green_hsv`` at any saturation up to
+    its own ceiling) whose ``saturation`` (H, W) reaches the per-column floor ``floor`` (W,)."""
+    least = np.ceil(floor).astype(np.uint8)  # whole saturations: s >= floor iff s >= this
+    return hued & (saturation >= least[None, :])
+
+
 def _thin_runs(white: NDArray[np.bool_], limit: FloatArray) -> NDArray[np.bool_]:
     """Which pixels of ``white`` (H, C) lie in a vertical run no longer than ``limit`` (H,)
     px at the run's bottom row."""
     width = white.shape[1]
-    cols, tops, ends = row_runs(white.T)
+    cols, tops, ends = row_runs(transposed(white))
     thin = (ends - tops) <= limit[ends - 1]
     out = np.zeros(white.size, dtype=bool)
     out[run_pixels(tops[thin] * width + cols[thin], width, (ends - tops)[thin])] = True

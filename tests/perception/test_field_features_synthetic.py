@@ -28,6 +28,7 @@ from perception.vision.field_geometry import (
     merge_segments,
 )
 from perception.vision.field_pixels import (
+    GroundProjection,
     best_splits,
     ground_covariances,
     ground_points,
@@ -36,6 +37,7 @@ from perception.vision.field_pixels import (
     row_runs,
     rows_from,
     run_pixels,
+    transposed,
 )
 from perception.vision.ground_point import range_bearing_cov
 
@@ -200,6 +202,38 @@ def test_best_splits_maximise_carpet_less_the_rest_below() -> None:
     np.testing.assert_array_equal(score, below.max(axis=0))
 
 
+def test_transposed_is_the_contiguous_transpose_of_any_mask() -> None:
+    rng = np.random.default_rng(0)
+    for shape in [(0, 5), (1, 7), (7, 1), (240, 320), (33, 17)]:
+        mask = rng.random(shape) > 0.5
+        for view in (mask, mask[:, ::2], mask[::3]):  # strided views too
+            flipped = transposed(view)
+            assert flipped.dtype == np.bool_ and flipped.flags.c_contiguous
+            np.testing.assert_array_equal(flipped, view.T)
+
+
+def test_slopes_are_the_jacobians_columns_to_the_last_bit() -> None:
+    rng = np.random.default_rng(2)
+    pixels = rng.uniform([0.0, 100.0], [320.0, 240.0], (200, 2))
+    axes = rng.integers(0, 2, 200)
+    projection = GroundProjection(CAMERA, STATE)
+    jacobians = projection.jacobians(pixels)
+    slopes = projection.slopes(pixels, axes)
+    assert slopes.tobytes() == jacobians[np.arange(200), :, axes].tobytes()
+
+
+def test_best_splits_of_random_masks_match_a_direct_count() -> None:
+    rng = np.random.default_rng(1)
+    for _ in range(20):
+        carpet = rng.random((int(rng.integers(1, 30)), int(rng.integers(1, 30)))) > rng.random()
+        height = carpet.shape[0]
+        below = np.cumsum(carpet[::-1], axis=0)[::-1]  # carpet from each row down
+        value = 2 * below - np.arange(height, 0, -1)[:, None]  # ... less all pixels from it down
+        best, score = best_splits(carpet)
+        np.testing.assert_array_equal(best, np.argmax(value, axis=0))
+        np.testing.assert_array_equal(score, value.max(axis=0))
+
+
 def test_rows_from_and_masked_median() -> None:
     first = np.array([-np.inf, -2.5, 0.0, 3.2, 4.0, 9.0, np.inf])
     np.testing.assert_array_equal(rows_from(first, 6), np.arange(6)[:, None] >= first[None, :])
@@ -211,6 +245,13 @@ def test_rows_from_and_masked_median() -> None:
 
 
 # ----- image lines, segments, merging ------------------------------------------------------
+
+
+def test_image_lines_of_too_few_points_is_empty() -> None:
+    line = np.column_stack([np.arange(12.0), np.zeros(12)])
+    assert image_lines(line[:11], tol_px=1.0, min_points=12, split_gap_px=5.0) == []
+    (found,) = image_lines(line, tol_px=1.0, min_points=12, split_gap_px=5.0)
+    assert sorted(found.indices.tolist()) == list(range(12))
 
 
 def test_image_lines_groups_collinear_points_and_splits_at_gaps() -> None:

@@ -20,6 +20,7 @@ from perception.geometry import (
     relative,
     transform_points,
     wrap_angle,
+    wrap_scalar,
 )
 from perception.types import CameraModel, CameraState
 
@@ -34,6 +35,22 @@ def test_wrap_angle_range_and_values() -> None:
     assert wrap_angle(math.pi) == pytest.approx(-math.pi)
     many = wrap_angle(np.linspace(-50, 50, 1001))
     assert np.all(many >= -math.pi) and np.all(many < math.pi)
+
+
+def test_wrap_scalar_is_wrap_angle_to_the_last_bit() -> None:
+    rng = np.random.default_rng(0)
+    angles = np.concatenate(
+        [
+            rng.normal(0.0, 4.0, 20000),
+            rng.uniform(-1e3, 1e3, 2000),
+            np.arange(-20, 21) * math.pi / 2,
+            [0.0, -0.0, np.nextafter(math.pi, 0.0), np.nextafter(-math.pi, 0.0), 1e-300],
+        ]
+    )
+    scalar = np.array([wrap_scalar(a) for a in angles])  # numpy scalars ...
+    assert scalar.view(np.int64).tolist() == wrap_angle(angles).view(np.int64).tolist()
+    assert [wrap_scalar(float(a)) for a in angles[:100]] == scalar[:100].tolist()  # ... floats
+    assert isinstance(wrap_scalar(np.float64(4.0)), float)
 
 
 def test_compose_known_case() -> None:
