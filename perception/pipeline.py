@@ -29,6 +29,8 @@ Provider choice, by representation (:data:`PROVIDERS`; the defaults of
     odometry ──► odometry_pose [dead_reckoning]
     horizon_features, field_features, self_pose (the last frame's)
                                   ──► field_end [none | bag_of_words] ──► self_pose [field_features]
+    image_detections (+ bottom_image) ──► ball_sightings [cnn | cnn_both_cameras | oracle]
+                                  ──► ball [filter | oracle] (with odometry, self_pose)
 
 A representation an emulator delivers (``emulated``: the geometric camera mode's pole
 sightings) is read from :attr:`perception.types.SensorFrame.emulated` instead of a provider.
@@ -49,6 +51,7 @@ from perception.field.sensor_model import SensorModelConfig
 from perception.field.visibility import FeatureViewConfig
 from perception.geometry import FloatArray
 from perception.landmarks.horizon_features import HorizonFeatureConfig
+from perception.providers.ball import CnnBallSightings, TrackedBall, TwoCameraCnnBallSightings
 from perception.providers.base import PREVIOUS, PerceptionContext, Provider
 from perception.providers.circle_slam import CircleSlamProvider, SlamCircleMap
 from perception.providers.circles import LaserCircleMap
@@ -73,6 +76,8 @@ from perception.providers.landmarks import (
 )
 from perception.providers.odometry import DeadReckoning
 from perception.providers.oracles import (
+    OracleBall,
+    OracleBallSightings,
     OracleConfig,
     OraclePoleSightings,
     OracleRobotSightings,
@@ -93,6 +98,8 @@ from perception.providers.robots import (
 )
 from perception.providers.slam import EkfSlamProvider
 from perception.representations import (
+    BALL,
+    BALL_SIGHTINGS,
     CIRCLE_MAP,
     FIELD_END,
     FIELD_FEATURE_LAST_SEEN,
@@ -114,10 +121,12 @@ from perception.representations import (
 )
 from perception.slam import EkfSlamConfig
 from perception.slam.circle_slam import CircleSlamConfig
+from perception.tracking.ball_filter import BallFilterConfig
 from perception.tracking.robot_tracker import RobotTrackerConfig
 from perception.tracking.sonar_filter import SonarFilterConfig
 from perception.types import SensorFrame
 from perception.validation import check_choice, check_in_interval
+from perception.vision.cnn_ball import CnnBallConfig
 from perception.vision.cnn_detector import CnnDetectorConfig
 from perception.vision.cnn_robots import CnnRobotConfig
 from perception.vision.colour_filter import ColourFilterConfig
@@ -166,6 +175,15 @@ PROVIDERS: Mapping[str, Mapping[str, ProviderFactory]] = {
         "vision": lambda c, ctx: VisionFieldFeatures(c.field_detector, ctx),
         "vision_both_cameras": lambda c, ctx: TwoCameraFieldFeatures(c.field_detector, ctx),
         "oracle": lambda c, ctx: OracleFieldFeatures(c.feature_view, ctx),
+    },
+    BALL_SIGHTINGS: {
+        "cnn": lambda c, ctx: CnnBallSightings(c.cnn_ball),
+        "cnn_both_cameras": lambda c, ctx: TwoCameraCnnBallSightings(c.cnn_ball, c.cnn, ctx),
+        "oracle": lambda c, ctx: OracleBallSightings(c.oracle, ctx),
+    },
+    BALL: {
+        "filter": lambda c, ctx: TrackedBall(c.ball_filter),
+        "oracle": lambda c, ctx: OracleBall(c.oracle),
     },
     CIRCLE_MAP: {
         "laser": lambda c, ctx: LaserCircleMap(c.circle_mapper),
@@ -256,6 +274,12 @@ class PipelineConfig:
     # unknown, or recognised from natural landmarks on the horizon (seed 004 ch. 4)
     field_end: str = "none"  # one of PROVIDERS["field_end"]
     natural_landmarks: FieldEndProviderConfig = field(default_factory=FieldEndProviderConfig)
+    # The ball: sightings from the CNN's ball boxes (the renderer's row offset taken out, as
+    # for the field features), and the ball's filter in the field frame
+    ball_sightings: str = "cnn"  # one of PROVIDERS["ball_sightings"]
+    cnn_ball: CnnBallConfig = field(default_factory=lambda: CnnBallConfig(row_offset_px=1.0))
+    ball: str = "filter"  # one of PROVIDERS["ball"]
+    ball_filter: BallFilterConfig = field(default_factory=BallFilterConfig)
 
     def __post_init__(self) -> None:
         for representation in PROVIDERS:

@@ -34,6 +34,10 @@ name                   value
                        frame the pose estimators use (the walk's, or with the visual heading)
 ``field_end``          :class:`perception.landmarks.field_end.FieldEndBelief`: P(facing the
                        away goal) from natural landmarks, and whether it is certain
+``ball_sightings``     ``tuple[BallSighting, ...]``: the ball seen this frame (robot frame),
+                       best first
+``ball``               :class:`perception.types.BallEstimate`: the ball's position and
+                       velocity with their covariance (field frame)
 =====================  ================================================================
 """
 
@@ -62,6 +66,8 @@ FIELD_FEATURE_LAST_SEEN = "field_feature_last_seen"
 HORIZON_FEATURES = "horizon_features"
 ODOMETRY = "odometry"
 FIELD_END = "field_end"
+BALL_SIGHTINGS = "ball_sightings"
+BALL = "ball"
 REPRESENTATIONS = (
     ODOMETRY_POSE,
     IMAGE_DETECTIONS,
@@ -77,6 +83,8 @@ REPRESENTATIONS = (
     HORIZON_FEATURES,
     ODOMETRY,
     FIELD_END,
+    BALL_SIGHTINGS,
+    BALL,
 )
 
 # the SensorFrame fields a provider may read (all but its time and the emulated representations)

@@ -183,6 +183,41 @@ class RobotSighting:
 
 
 @dataclass(frozen=True, kw_only=True)
+class BallSighting:
+    """The ball seen from our robot in one frame (robot frame).
+
+    ``range_m`` (m) and ``bearing_rad`` (rad) locate the ball's centre over the ground; ``cov``
+    (2, 2) is their covariance over ``(range, bearing)``; ``box`` the (4,) pixel box
+    ``(u0, v0, u1, v1)`` it was seen in (NaN when not from an image); ``score`` the detector's.
+    """
+
+    range_m: float
+    bearing_rad: float
+    cov: FloatArray
+    box: FloatArray = field(default_factory=lambda: np.full(4, np.nan))
+    score: float = 1.0
+
+
+@dataclass(frozen=True, kw_only=True)
+class BallEstimate:
+    """What perception believes about the ball.
+
+    ``state`` (4,) ``(x, y, vx, vy)`` (m, m/s, field frame) with covariance ``cov`` (4, 4) (the
+    believed pose's uncertainty included); ``relative`` (4,) the same in our robot's frame with
+    ``relative_cov`` (4, 4); ``known`` False until the ball was first seen (the states are then
+    zero: the ball may be anywhere); ``last_seen_s`` the time (s) of its last sighting (-inf
+    before the first).
+    """
+
+    state: FloatArray
+    cov: FloatArray
+    relative: FloatArray
+    relative_cov: FloatArray
+    known: bool
+    last_seen_s: float
+
+
+@dataclass(frozen=True, kw_only=True)
 class RobotTrack:
     """One tracked robot in the field frame.
 
@@ -221,7 +256,8 @@ class GroundTruth:
     An env fills :attr:`SensorFrame.truth` only when a configured provider requires it, so
     that no other provider can read it. ``robot_pose`` (3,) is the sensing robot's pose;
     ``landmark_ids`` (L,) int and ``landmarks`` (L, 2) the mapped poles' ids and positions;
-    ``robots`` (R, 2) the other robots' positions with their ``robot_teams`` (R,) (0 or 1).
+    ``robots`` (R, 2) the other robots' positions with their ``robot_teams`` (R,) (0 or 1);
+    ``ball`` (2,) and ``ball_velocity`` (2,) (m, m/s), NaN in a world without a ball.
     """
 
     robot_pose: FloatArray
@@ -229,6 +265,8 @@ class GroundTruth:
     landmarks: FloatArray
     robots: FloatArray = field(default_factory=lambda: np.zeros((0, 2)))
     robot_teams: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    ball: FloatArray = field(default_factory=lambda: np.full(2, np.nan))
+    ball_velocity: FloatArray = field(default_factory=lambda: np.full(2, np.nan))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -248,6 +286,9 @@ class SensorFrame:
       per sonar in the robot's ring order, NaN for no echo, or ``None``;
     - ``laser``: (B,) ranges (m) with NaN for no return, or ``None``; ``laser_model`` its beam
       angles (:meth:`perception.sensor_models.LaserModel.beam_angles`) and noise;
+    - ``kick_velocity`` (2,): the ball velocity (m/s, robot frame) that a kick our robot's
+      motion made since the last frame was meant to give; zero when it made none (always, for
+      a robot that cannot kick);
     - ``emulated``: representations that a fast emulator produced in place of their providers
       (the geometric camera mode: ``{"pole_sightings": ...}``), keyed by representation name;
     - ``truth``: the ground truth, only when an oracle provider needs it, else ``None``.
@@ -265,6 +306,7 @@ class SensorFrame:
     sonar_ring: FloatArray | None = None
     laser: FloatArray | None = None
     laser_model: LaserModel | None = None
+    kick_velocity: FloatArray = field(default_factory=lambda: np.zeros(2))
     emulated: Mapping[str, Any] = field(default_factory=dict)
     truth: GroundTruth | None = None
 

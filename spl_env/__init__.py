@@ -28,12 +28,18 @@ _ENTRY_POINTS = {
     "SPL/ActiveVision-v0": "spl_env.envs.active_vision:ActiveVisionEnv",
     "SPL/ActiveVision-v1": "spl_env.envs.active_vision_robots:ActiveVisionRobotsEnv",
     "SPL/LookAround-v0": "spl_env.envs.look_around:LookAroundEnv",
+    "SPL/Striker-v0": "spl_env.envs.soccer:StrikerEnv",
+    "SPL/Goalie-v0": "spl_env.envs.soccer:GoalieEnv",
+    "SPL/PenaltyShootout-v0": "spl_env.envs.soccer:PenaltyShootoutEnv",
     "Circles/Office-v0": "spl_env.envs.circles:OfficeEnv",
     "Circles/Backyard-v0": "spl_env.envs.circles:BackyardEnv",
 }
 ENV_IDS: tuple[str, ...] = (*_ENTRY_POINTS, *_NO_POLES)
 SPL_ENV_IDS: tuple[str, ...] = tuple(i for i in ENV_IDS if i.startswith("SPL/"))  # Naos, field
 CIRCLES_ENV_IDS: tuple[str, ...] = tuple(i for i in ENV_IDS if i.startswith("Circles/"))
+SOCCER_ENV_IDS: tuple[str, ...] = ("SPL/Striker-v0", "SPL/Goalie-v0", "SPL/PenaltyShootout-v0")
+# the SPL ids whose action is the head (active vision), the body walking a scripted path
+HEAD_CONTROL_ENV_IDS: tuple[str, ...] = tuple(i for i in SPL_ENV_IDS if i not in SOCCER_ENV_IDS)
 
 for _env_id, _entry_point in _ENTRY_POINTS.items():
     if _env_id not in registry:
@@ -47,4 +53,10 @@ for _env_id, _with_poles in _NO_POLES.items():
             kwargs=NO_POLES_KWARGS,
         )
 
-__all__ = ["CIRCLES_ENV_IDS", "ENV_IDS", "SPL_ENV_IDS"]
+__all__ = [
+    "CIRCLES_ENV_IDS",
+    "ENV_IDS",
+    "HEAD_CONTROL_ENV_IDS",
+    "SOCCER_ENV_IDS",
+    "SPL_ENV_IDS",
+]

@@ -73,6 +73,8 @@ class WorldState:
             landmarks=self.landmarks.copy(),
             robots=np.delete(self.poses, robot, axis=0)[:, :2].copy(),
             robot_teams=np.delete(self.teams, robot),
+            ball=self.ball.copy(),
+            ball_velocity=self.ball_velocity.copy(),
         )
 
 

@@ -15,10 +15,24 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from perception.geometry import FloatArray, range_bearing, wrap_angle
+from perception.geometry import FloatArray, range_bearing, rot_z, wrap_angle
 from perception.providers.base import PerceptionContext, Provider
-from perception.representations import POLE_SIGHTINGS, ROBOT_SIGHTINGS, SELF_POSE, Prior
-from perception.types import GroundTruth, LandmarkObservation, RobotSighting, SlamEstimate
+from perception.representations import (
+    BALL,
+    BALL_SIGHTINGS,
+    POLE_SIGHTINGS,
+    ROBOT_SIGHTINGS,
+    SELF_POSE,
+    Prior,
+)
+from perception.types import (
+    BallEstimate,
+    BallSighting,
+    GroundTruth,
+    LandmarkObservation,
+    RobotSighting,
+    SlamEstimate,
+)
 from perception.validation import check_positive
 
 
@@ -32,9 +46,11 @@ class OracleConfig:
     position_std_m: float = 0.05  # self pose x and y noise
     heading_std_rad: float = 0.02  # self pose heading noise
     landmark_std_m: float = 0.05  # noise of each mapped pole coordinate
+    ball_velocity_std_mps: float = 0.05  # noise of each ball velocity component (ball oracle)
 
     def __post_init__(self) -> None:
         for name in (
+            "ball_velocity_std_mps",
             "range_std_m",
             "bearing_std_rad",
             "max_range_m",
@@ -71,7 +87,8 @@ class _InViewOracle(_Oracle):
 
     def __init__(self, config: OracleConfig, context: PerceptionContext) -> None:
         super().__init__(config)
-        self.half_fov_rad = math.radians(context.require_camera("the pole oracle").hfov_deg) / 2
+        camera = context.require_camera(f"the {type(self).__name__} oracle")
+        self.half_fov_rad = math.radians(camera.hfov_deg) / 2
 
     def seen(
         self, inputs: Mapping[str, Any], points: FloatArray
@@ -146,4 +163,49 @@ class OracleSelfPose(_Oracle):
             landmark_ids=np.asarray(truth.landmark_ids, dtype=np.int64).copy(),
             landmarks=landmarks,
             landmark_covs=np.repeat(np.eye(2)[None] * c.landmark_std_m**2, n, axis=0),
+        )
+
+
+class OracleBallSightings(_InViewOracle):
+    """The ball when in view (:class:`_InViewOracle`), with Gaussian range and bearing noise;
+    no occlusion. Nothing in a world without a ball."""
+
+    provides = BALL_SIGHTINGS
+
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> tuple[BallSighting, ...]:
+        truth: GroundTruth = inputs["truth"]
+        ball = truth.ball[None] if np.all(np.isfinite(truth.ball)) else np.zeros((0, 2))
+        _, ranges, bearings, cov = self.seen(inputs, ball)
+        return tuple(
+            BallSighting(range_m=r, bearing_rad=b, cov=cov.copy())
+            for r, b in zip(ranges, bearings, strict=True)
+        )
+
+
+class OracleBall(_Oracle):
+    """The true ball, always known, with Gaussian noise (``position_std_m`` on each position
+    axis, ``ball_velocity_std_mps`` on each velocity axis) and the matching diagonal
+    covariance, relative to the true pose; ValueError in a world without a ball."""
+
+    provides = BALL
+    requires = ("truth",)
+
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> BallEstimate:
+        truth: GroundTruth = inputs["truth"]
+        state = np.concatenate([truth.ball, truth.ball_velocity])
+        if not np.all(np.isfinite(state)):
+            raise ValueError("the ball oracle needs a world with a ball (truth.ball is NaN)")
+        c = self.config
+        std = np.array([c.position_std_m] * 2 + [c.ball_velocity_std_mps] * 2)
+        noisy = state + self.rng.normal(0.0, 1.0, size=4) * std
+        x, y, theta = truth.robot_pose
+        back = rot_z(-theta)[:2, :2]
+        relative = np.concatenate([back @ (noisy[:2] - (x, y)), back @ noisy[2:]])
+        return BallEstimate(
+            state=noisy,
+            cov=np.diag(std**2),
+            relative=relative,
+            relative_cov=np.diag(std**2),  # isotropic per pair: the same in any frame
+            known=True,
+            last_seen_s=time_s,
         )

@@ -17,6 +17,7 @@ step loop of its own.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from abc import abstractmethod
 from collections.abc import Mapping
@@ -54,7 +55,7 @@ from spl_env.observations.circles import CircleMapEncoder
 from spl_env.observations.field_features import FieldFeatureEncoder
 from spl_env.overrides import apply_overrides
 from spl_env.rendering import TopDownView, draw_detections, side_by_side
-from spl_env.robots.nao import NaoCommand, NaoRobot
+from spl_env.robots.nao import NaoCommand, NaoRobot, kick_intent
 from spl_env.scenes.spl_field import SplFieldScene
 from spl_env.sensors.emulation.registry import emulators_for
 from spl_env.sensors.rig import NaoRig
@@ -289,6 +290,52 @@ class RobotEnv(gym.Env[dict[str, Any], np.ndarray], Generic[StateT]):
         return info
 
 
+def perception_outputs(config: EnvConfig, requires: set[str]) -> set[str]:
+    """The representations an SPL env's pipeline computes: what its observation and reward
+    read (``requires``), plus at ``info_level="full"`` what the full ``info`` shows."""
+    outputs = set(requires)
+    if config.info_level == "full":
+        outputs |= set(FULL_INFO_REQUIRES)
+        if not config.scene.poles_enabled:
+            outputs.discard(POLE_SIGHTINGS)
+        if config.sensors.laser is not None:
+            outputs.add(CIRCLE_MAP)
+        if config.perception.self_pose == "field_features":
+            outputs.add(FIELD_FEATURES)
+    return outputs
+
+
+def perception_context(config: EnvConfig, scene: SplFieldScene) -> PerceptionContext:
+    """What an SPL robot's providers are built from (one per env: it loads the CNN once)."""
+    return PerceptionContext(
+        config.sensors.camera.model, scene.codes, config.scene.poles.geometry, scene.dimensions
+    )
+
+
+def check_camera_mode(config: EnvConfig, pipeline: PerceptionPipeline) -> None:
+    """ValueError when the geometric camera mode (no images) meets a provider that reads
+    images and has no emulator."""
+    if config.sensors.camera_mode == "rendered" or "image" not in pipeline.frame_inputs:
+        return
+    readers = [
+        name for name in pipeline.representations if "image" in pipeline.provider(name).requires
+    ]
+    raise ValueError(
+        "camera_mode='geometric' renders no image, but the providers of "
+        f"{readers} read images and have no emulator; the geometric mode emulates "
+        "the colour front end: pass frontend='colour' with it (or camera_mode='rendered')"
+    )
+
+
+def info_layout(config: EnvConfig, scene: SplFieldScene) -> InfoLayout:
+    """The fixed sizes of an SPL env's ``info``."""
+    return InfoLayout(
+        landmark_ids=scene.landmark_ids,
+        max_robots=config.perception.robot_tracker.max_tracks,
+        max_circles=config.perception.circle_mapper.max_circles,
+    )
+
+
 class SplEnv(RobotEnv[WorldState]):
     """Naos on an SPL field: the env core's SPL world; subclasses set :attr:`task_class`,
     :attr:`config_class` and :attr:`aliases` and carry the env's documentation."""
@@ -303,8 +350,8 @@ class SplEnv(RobotEnv[WorldState]):
         cfg = self.config
         self.scene = SplFieldScene(self.world, cfg.scene)
         self.robots = [NaoRobot(self.world, "self", team=0, config=cfg.robot)] + [
-            NaoRobot(self.world, f"robot_{i}", team=(i + 1) % 2, config=cfg.robot)
-            for i in range(cfg.task.n_other_robots)
+            NaoRobot(self.world, f"robot_{i}", team=team, config=cfg.robot)
+            for i, team in enumerate(cfg.task.other_robot_teams)
         ]
         self.placement = Placement(
             self.scene.dimensions, self.scene.obstacles, cfg.robot.body_radius_m
@@ -322,41 +369,17 @@ class SplEnv(RobotEnv[WorldState]):
         self.encoders = self.task.encoders()
         if cfg.sensors.laser is not None:  # the laser maps circles
             self.encoders += (CircleMapEncoder(cfg.observed_circles),)
-        localise_by_field = cfg.perception.self_pose == "field_features"
-        if localise_by_field:
+        if cfg.perception.self_pose == "field_features":
             self.encoders += (FieldFeatureEncoder(),)
         emulators = emulators_for(self.scene, self.robots, cfg.sensors, cfg.perception)
-        outputs = {name for encoder in self.encoders for name in encoder.requires}
-        outputs |= set(self.task.reward_requires())
-        if cfg.info_level == "full":
-            outputs |= set(FULL_INFO_REQUIRES)
-            if not cfg.scene.poles_enabled:
-                outputs.discard(POLE_SIGHTINGS)
-            if cfg.sensors.laser is not None:
-                outputs.add(CIRCLE_MAP)
-            if localise_by_field:
-                outputs.add(FIELD_FEATURES)
-        self.perception_context = PerceptionContext(
-            cfg.sensors.camera.model,
-            self.scene.codes,
-            cfg.scene.poles.geometry,
-            self.scene.dimensions,
-        )
+        requires = {name for encoder in self.encoders for name in encoder.requires}
+        outputs = perception_outputs(cfg, requires | set(self.task.reward_requires()))
+        self.perception_context = perception_context(cfg, self.scene)
         self.pipeline = PerceptionPipeline(
             cfg.perception, self.perception_context, sorted(outputs), emulated=tuple(emulators)
         )
+        check_camera_mode(cfg, self.pipeline)
         rendered = cfg.sensors.camera_mode == "rendered"
-        if not rendered and "image" in self.pipeline.frame_inputs:
-            readers = [
-                name
-                for name in self.pipeline.representations
-                if "image" in self.pipeline.provider(name).requires
-            ]
-            raise ValueError(
-                "camera_mode='geometric' renders no image, but the providers of "
-                f"{readers} read images and have no emulator; the geometric mode emulates "
-                "the colour front end: pass frontend='colour' with it (or camera_mode='rendered')"
-            )
         self._render_image = rendered and "image" in self.pipeline.frame_inputs
         # the bottom camera is rendered only for a provider that reads it
         self._render_bottom = rendered and "bottom_image" in self.pipeline.frame_inputs
@@ -365,21 +388,19 @@ class SplEnv(RobotEnv[WorldState]):
             self.robots[AGENT],
             {name: emulators[name] for name in self.pipeline.emulated},
         )
-        self._info_layout = InfoLayout(
-            landmark_ids=self.scene.landmark_ids,
-            max_robots=cfg.perception.robot_tracker.max_tracks,
-            max_circles=cfg.perception.circle_mapper.max_circles,
-        )
+        self._info_layout = info_layout(cfg, self.scene)
         self._top_down = TopDownView(self.scene.dimensions)
         self._blocked = np.zeros(len(self.robots), dtype=bool)
         self._names = tuple(r.name for r in self.robots)
         self._teams = np.array([r.team for r in self.robots], dtype=np.int64)
         self._engine_delta = np.zeros(3)  # our walk engine's increment in the last step
+        self._kick_velocity = np.zeros(2)  # the ball velocity our kick meant to give (robot)
         self.camera_yaw_rate_rps = 0.0  # our camera's turn rate in the last step (rad/s)
 
     def _start_episode(self, rng: np.random.Generator) -> FloatArray:
         self._blocked[:] = False
         self._engine_delta = np.zeros(3)
+        self._kick_velocity = np.zeros(2)
         self.camera_yaw_rate_rps = 0.0
         start = self.task.start_pose(rng)
         # the filter's start belief: the true start off by a draw from its own prior
@@ -409,6 +430,7 @@ class SplEnv(RobotEnv[WorldState]):
         walk engine's increment (3,)."""
         dt = self.config.control_dt_s
         engine_delta = np.zeros(3)
+        self._kick_velocity = np.zeros(2)
         for k, (robot, command) in enumerate(zip(self.robots, commands, strict=True)):
             if command.head is not None:
                 robot.move_head(command.head, dt)
@@ -416,18 +438,29 @@ class SplEnv(RobotEnv[WorldState]):
             increment, self._blocked[k] = self.placement.walk(robot, command.walk, dt, others)
             if k == AGENT:
                 engine_delta = increment
+            if command.kick and k == AGENT:  # our motion knows the kick it made
+                self._kick_velocity = kick_intent(
+                    robot.config, command.kick_angle_rad, command.kick_strength
+                )
             if command.kick:
                 ball, _ = self.scene.ball_state()
-                velocity = robot.kick_velocity(ball)
+                velocity = robot.kick_velocity(
+                    ball, self.np_random, command.kick_angle_rad, command.kick_strength
+                )
                 if velocity is not None:
                     self.scene.place_ball(ball, velocity)
         return engine_delta
+
+    def _sense(self, physics_s: float) -> dict[str, float]:
+        times = super()._sense(physics_s)
+        self.task.perceived(self.perception_output)
+        return times
 
     def _sense_frame(self) -> tuple[SensorFrame, dict[str, float]]:
         state = self._state
         assert state is not None  # set by reset() and step() before sensing
         truth = state.truth_for(AGENT) if "truth" in self.pipeline.frame_inputs else None
-        return self.rig.sense(
+        frame, times = self.rig.sense(
             self.world,
             self._time_s,
             self._engine_delta,
@@ -437,6 +470,7 @@ class SplEnv(RobotEnv[WorldState]):
             render_bottom=self._render_bottom,
             truth=truth,
         )
+        return dataclasses.replace(frame, kick_velocity=self._kick_velocity.copy()), times
 
     def _world_state(self) -> WorldState:
         ball, ball_velocity = self.scene.ball_state()

@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from perception.field.features import FEATURE_KINDS, FieldFeature
 from perception.representations import (
+    BALL,
     CIRCLE_MAP,
     FIELD_FEATURES,
     ODOMETRY,
@@ -25,6 +26,7 @@ from perception.representations import (
     SELF_POSE,
 )
 from perception.types import (
+    BallEstimate,
     LandmarkObservation,
     MappedCircle,
     OdometryStep,
@@ -173,6 +175,19 @@ def odometry_info(step: OdometryStep, layout: InfoLayout) -> dict[str, Any]:
     }
 
 
+def ball_info(ball: BallEstimate, layout: InfoLayout) -> dict[str, Any]:
+    """The believed ball (field frame): ``ball`` (2,) position (m), ``ball_velocity`` (2,)
+    (m/s), ``ball_cov`` (4, 4) over both, ``ball_known`` (seen at least once this episode) and
+    ``ball_last_seen_s`` (s; -1 before the first sighting: -inf would not survive JSON)."""
+    return {
+        "ball": ball.state[:2].copy(),
+        "ball_velocity": ball.state[2:].copy(),
+        "ball_cov": ball.cov.copy(),
+        "ball_known": np.bool_(ball.known),
+        "ball_last_seen_s": np.float64(ball.last_seen_s if ball.known else -1.0),
+    }
+
+
 PERCEPTION_INFO: Mapping[str, Callable[[Any, InfoLayout], dict[str, Any]]] = {
     ODOMETRY: odometry_info,
     SELF_POSE: self_pose_info,
@@ -181,6 +196,7 @@ PERCEPTION_INFO: Mapping[str, Callable[[Any, InfoLayout], dict[str, Any]]] = {
     ROBOT_TRACKS: robot_tracks_info,
     CIRCLE_MAP: circle_map_info,
     FIELD_FEATURES: field_features_info,
+    BALL: ball_info,
 }
 # what the full info always reads; robot tracks join where the env's task already tracks robots
 FULL_INFO_REQUIRES = (SELF_POSE, POLE_SIGHTINGS, ODOMETRY_POSE)

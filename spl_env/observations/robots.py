@@ -15,6 +15,17 @@ from spl_env.observations.poles import RANGE_SCALE_M, SINCE_SEEN_SCALE_S
 from spl_env.observations.self_pose import STD_SCALE_M
 
 SPEED_SCALE_MPS = 0.3  # squashing scale of each velocity component (m/s)
+ROBOT_KEYS = (  # RobotTracksEncoder's keys, in order
+    "robots_cos_bearing",
+    "robots_sin_bearing",
+    "robots_range",
+    "robots_velocity_x",
+    "robots_velocity_y",
+    "robots_std",
+    "robots_team",
+    "robots_since_seen",
+    "robots_mask",
+)
 
 
 def nearest_confirmed(tracks: tuple[RobotTrack, ...], pose: FloatArray, k: int) -> list[RobotTrack]:
@@ -42,23 +53,16 @@ class RobotTracksEncoder:
     requires: tuple[str, ...] = (ROBOT_TRACKS, SELF_POSE)
 
     def spaces(self) -> dict[str, spaces.Box]:
-        k = self.max_robots
+        signed = {"robots_cos_bearing", "robots_sin_bearing", "robots_velocity_x"}
+        signed |= {"robots_velocity_y", "robots_team"}
         return {
-            "robots_cos_bearing": box(-1.0, 1.0, k),
-            "robots_sin_bearing": box(-1.0, 1.0, k),
-            "robots_range": box(0.0, 1.0, k),
-            "robots_velocity_x": box(-1.0, 1.0, k),
-            "robots_velocity_y": box(-1.0, 1.0, k),
-            "robots_std": box(0.0, 1.0, k),
-            "robots_team": box(-1.0, 1.0, k),
-            "robots_since_seen": box(0.0, 1.0, k),
-            "robots_mask": box(0.0, 1.0, k),
+            key: box(-1.0 if key in signed else 0.0, 1.0, self.max_robots) for key in ROBOT_KEYS
         }
 
     def encode(self, data: EncoderInput) -> dict[str, FloatArray]:
         slam = data.output.get_as(SELF_POSE, SlamEstimate)
         tracks = nearest_confirmed(data.output[ROBOT_TRACKS], slam.pose, self.max_robots)
-        obs = {key: np.zeros(self.max_robots) for key in self.spaces()}
+        obs = {key: np.zeros(self.max_robots) for key in ROBOT_KEYS}
         if not tracks:
             return obs
         n = len(tracks)

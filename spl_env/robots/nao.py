@@ -59,7 +59,10 @@ class RobotConfig:
     sway_bob_m: float = 0.008  # vertical bob amplitude at full walking speed
     kick_reach_m: float = 0.25  # a kick reaches a ball this far ahead of the robot centre
     kick_half_width_m: float = 0.12  # ... and this far to either side
-    kick_speed_mps: float = 2.0  # ball speed a kick gives
+    kick_speed_mps: float = 2.0  # ball speed a kick at full strength gives
+    kick_max_angle_rad: float = math.radians(60.0)  # a kick's direction off the heading, at most
+    kick_angle_std_rad: float = math.radians(6.0)  # a kick's direction noise (std)
+    kick_speed_std_fraction: float = 0.1  # a kick's speed noise (std / speed)
     # A systematic veer of the body that the walk engine does not know of (rad per metre
     # walked, + = left): the robot turns while its engine, and so its odometry, reports
     # straight (seed 004 §5.3's uncalibrated robot had a left turn bias). 0 by default.
@@ -83,8 +86,15 @@ class RobotConfig:
             "kick_reach_m",
             "kick_half_width_m",
             "kick_speed_mps",
+            "kick_max_angle_rad",
         ):
             check_positive("RobotConfig", name, getattr(self, name))
+        for name in ("kick_angle_std_rad", "kick_speed_std_fraction"):
+            check_positive("RobotConfig", name, getattr(self, name), allow_zero=True)
+        if not self.kick_max_angle_rad <= math.pi / 2:
+            raise ValueError(
+                f"RobotConfig.kick_max_angle_rad must be <= pi/2, got {self.kick_max_angle_rad}"
+            )
         if not self.head_yaw_limit_rad <= math.pi:
             raise ValueError(
                 f"RobotConfig.head_yaw_limit_rad must be <= pi, got {self.head_yaw_limit_rad}"
@@ -136,12 +146,24 @@ class NaoCommand:
 
     ``walk`` (3,): body-frame velocity ``(vx, vy, omega)`` (m/s, m/s, rad/s), limited by the
     walk engine; ``head`` (2,): yaw and pitch targets (rad), or ``None`` to keep the head where
-    it is; ``kick``: kick the ball if it lies in the kick zone in front of the feet.
+    it is; ``kick``: kick the ball if it lies in the kick zone in front of the feet, towards
+    ``kick_angle_rad`` (rad, off the heading, + = left) at ``kick_strength`` (0-1] of the full
+    kick's speed (:meth:`NaoRobot.kick_velocity`).
     """
 
     walk: FloatArray = field(default_factory=lambda: np.zeros(3))
     head: FloatArray | None = None
     kick: bool = False
+    kick_angle_rad: float = 0.0
+    kick_strength: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not math.isfinite(self.kick_angle_rad):
+            raise ValueError(f"NaoCommand.kick_angle_rad must be finite, got {self.kick_angle_rad}")
+        if not 0.0 < self.kick_strength <= 1.0:
+            raise ValueError(
+                f"NaoCommand.kick_strength must be in (0, 1], got {self.kick_strength}"
+            )
 
 
 def head_target(config: RobotConfig, action: FloatArray) -> FloatArray:
@@ -156,6 +178,34 @@ def head_target(config: RobotConfig, action: FloatArray) -> FloatArray:
         config.head_pitch_max_rad - config.head_pitch_min_rad
     )
     return np.array([yaw, pitch])
+
+
+def walk_target(config: RobotConfig, action: FloatArray) -> FloatArray:
+    """The walk command (3,) ``(vx, vy, omega)`` (m/s, m/s, rad/s) of a walk action (3,) in
+    [-1, 1]: each component times its speed limit ``max_speed``."""
+    return np.asarray(action, dtype=np.float64) * np.asarray(config.max_speed)
+
+
+def kick_angle(config: RobotConfig, action: float) -> float:
+    """The kick direction (rad, off the heading, + = left) of a kick-direction action in
+    [-1, 1]: ``action * kick_max_angle_rad``."""
+    return float(action) * config.kick_max_angle_rad
+
+
+def kick_intent(config: RobotConfig, angle_rad: float, strength: float) -> FloatArray:
+    """The ball velocity (2,) (m/s, robot frame) a kick towards ``angle_rad`` off the heading
+    (clipped to ``kick_max_angle_rad``) at ``strength`` (0-1] means to give, before its noise."""
+    aim = float(np.clip(angle_rad, -config.kick_max_angle_rad, config.kick_max_angle_rad))
+    return config.kick_speed_mps * strength * np.array([math.cos(aim), math.sin(aim)])
+
+
+def in_kick_zone(config: RobotConfig, pose: FloatArray, ball_xy: FloatArray) -> bool:
+    """Whether the ball (2,) lies in the kick zone of a robot at ``pose`` (3,) (one frame, m):
+    ``kick_reach_m`` ahead of its centre at most, ``kick_half_width_m`` to either side."""
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    dx, dy = ball_xy[0] - pose[0], ball_xy[1] - pose[1]
+    ahead, aside = c * dx + s * dy, -s * dx + c * dy
+    return 0.0 < ahead <= config.kick_reach_m and abs(aside) <= config.kick_half_width_m
 
 
 def head_action(config: RobotConfig, yaw_rad: float, pitch_rad: float) -> FloatArray:
@@ -298,16 +348,32 @@ class NaoRobot:
         side = -math.sin(self.pose[2]) * dx + math.cos(self.pose[2]) * dy
         return -math.copysign(self.config.bump_turn_rps * dt_s, side)
 
-    def kick_velocity(self, ball_xy: FloatArray) -> FloatArray | None:
-        """Ball velocity (2,) (m/s, field frame) of a kick now, or None when the ball (2,) is
-        outside the kick zone (``kick_reach_m`` ahead, ``kick_half_width_m`` to either side)."""
-        cfg = self.config
-        c, s = math.cos(self.pose[2]), math.sin(self.pose[2])
-        dx, dy = ball_xy[0] - self.pose[0], ball_xy[1] - self.pose[1]
-        ahead, aside = c * dx + s * dy, -s * dx + c * dy
-        if not (0.0 < ahead <= cfg.kick_reach_m and abs(aside) <= cfg.kick_half_width_m):
+    def in_kick_zone(self, ball_xy: FloatArray) -> bool:
+        """Whether the ball (2,) (m, field frame) lies in this robot's kick zone
+        (:func:`in_kick_zone`)."""
+        return in_kick_zone(self.config, self.pose, ball_xy)
+
+    def kick_velocity(
+        self,
+        ball_xy: FloatArray,
+        rng: np.random.Generator,
+        angle_rad: float = 0.0,
+        strength: float = 1.0,
+    ) -> FloatArray | None:
+        """Ball velocity (2,) (m/s, field frame) of a kick now towards ``angle_rad`` off the
+        heading (clipped to ``kick_max_angle_rad``, the foot's reach) at ``strength`` (0-1] of
+        ``kick_speed_mps``, its direction and speed disturbed by Gaussian noise
+        (``kick_angle_std_rad``, ``kick_speed_std_fraction``) drawn from ``rng``; None when the
+        ball (2,) is outside the kick zone (:meth:`in_kick_zone`, no draw then)."""
+        if not self.in_kick_zone(ball_xy):
             return None
-        return cfg.kick_speed_mps * np.array([c, s])
+        cfg = self.config
+        intent = kick_intent(cfg, angle_rad, strength)
+        noise = rng.normal(0.0, 1.0, size=2)
+        direction = self.pose[2] + math.atan2(intent[1], intent[0])
+        direction += cfg.kick_angle_std_rad * noise[0]
+        speed = max(float(np.hypot(*intent)) * (1.0 + cfg.kick_speed_std_fraction * noise[1]), 0.0)
+        return speed * np.array([math.cos(direction), math.sin(direction)])
 
     def move_head(self, target: FloatArray, dt_s: float) -> None:
         """Turn the head towards ``target`` (yaw, pitch) rad within joint and speed limits."""

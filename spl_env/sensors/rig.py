@@ -23,6 +23,7 @@ from perception.geometry import FloatArray
 from perception.types import CameraState, GroundTruth, SensorFrame
 from spl_env.robots.nao import NaoRobot, camera_state_for
 from spl_env.sensors.camera import Camera, CameraConfig, EpisodeLighting, blur_length_px
+from spl_env.sensors.emulation.ball import CNN_BALL, CNN_BALL_BOTTOM, GeometricBallConfig
 from spl_env.sensors.emulation.poles import GeometricCameraConfig
 from spl_env.sensors.emulation.robots import CNN_ROBOTS, VISION_ROBOTS, GeometricRobotConfig
 from spl_env.sensors.laser import Laser, LaserConfig
@@ -46,6 +47,8 @@ class RigConfig:
     geometric_camera: GeometricCameraConfig = field(default_factory=GeometricCameraConfig)
     geometric_robots_cnn: GeometricRobotConfig = CNN_ROBOTS  # robot_sightings="cnn"
     geometric_robots_vision: GeometricRobotConfig = VISION_ROBOTS  # robot_sightings="vision"
+    geometric_ball: GeometricBallConfig = CNN_BALL  # ball_sightings="cnn", top camera
+    geometric_ball_bottom: GeometricBallConfig = CNN_BALL_BOTTOM  # "cnn_both_cameras": bottom
     odometry: OdometryConfig = field(default_factory=OdometryConfig)
     sonar: SonarConfig | None = field(default_factory=SonarConfig)
     laser: LaserConfig | None = None

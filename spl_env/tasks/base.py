@@ -45,6 +45,12 @@ class TaskConfig(EpisodeConfig):
                 f"got {self.n_other_robots!r}"
             )
 
+    @property
+    def other_robot_teams(self) -> tuple[int, ...]:
+        """The team (0 ours, 1 theirs) of each scripted robot: by default theirs and ours in
+        turn."""
+        return tuple((k + 1) % 2 for k in range(self.n_other_robots))
+
 
 @dataclass(frozen=True, kw_only=True)
 class TaskContext:
@@ -114,6 +120,10 @@ class Task(ABC):
     @abstractmethod
     def reward_terms(self, state: WorldState, output: PerceptionOutput) -> dict[str, float]:
         """Each reward term of this step; the reward is their sum."""
+
+    def perceived(self, output: PerceptionOutput) -> None:  # noqa: B027  (most tasks need none)
+        """What perception believed after the last step, before the next :meth:`command`: for
+        a task whose scripted parts of our robot (a head) act on beliefs. Default: ignored."""
 
     def terminated(self, state: WorldState, output: PerceptionOutput) -> bool:
         """Whether the episode ended in a terminal state (default: never)."""

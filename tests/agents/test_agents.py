@@ -84,7 +84,7 @@ def test_look_at_stalest_points_at_least_recent_pole() -> None:
     assert action[0] == pytest.approx(30.0 / 119.5, abs=1e-6)
 
 
-@pytest.mark.parametrize("env_id", spl_env.SPL_ENV_IDS)
+@pytest.mark.parametrize("env_id", spl_env.HEAD_CONTROL_ENV_IDS)
 @pytest.mark.parametrize("name", sorted(BASELINES))
 def test_baselines_run_on_every_env(env_id: str, name: str) -> None:
     env = gym.make(env_id, camera_mode="geometric", frontend="colour", episode_s=1.0)

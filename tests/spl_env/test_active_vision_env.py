@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env as gym_check_env
 
-from spl_env import SPL_ENV_IDS as ENV_IDS
+from spl_env import HEAD_CONTROL_ENV_IDS as ENV_IDS
 
 FAST = {"episode_s": 3.0}  # 30 steps: short episodes keep the suite quick
 

@@ -78,7 +78,10 @@ def test_gymnasium_make_vec(env_id: str, mode: str, info_level: str) -> None:
         assert stacked_layout(info) == expected
         # different seeds, different robots: the sub-envs are not copies of one another
         if info_level == "full":
-            poses = info["ground_truth"]["robot_pose"]
+            truth = info["ground_truth"]
+            poses = truth["robot_pose"]
+            if "robots" in truth:  # (the penalty taker always starts on the same spot)
+                poses = np.concatenate([poses, truth["robots"].reshape(N_ENVS, -1)], axis=1)
             assert not np.array_equal(poses[0], poses[1])
         resetting = np.zeros(N_ENVS, dtype=bool)  # next-step autoreset: this step resets
         ended = 0

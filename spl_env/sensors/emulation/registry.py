@@ -11,10 +11,16 @@ from collections.abc import Callable, Mapping
 
 from perception.field.field_map import FieldMap
 from perception.pipeline import PipelineConfig
-from perception.representations import FIELD_FEATURES, POLE_SIGHTINGS, ROBOT_SIGHTINGS
+from perception.representations import (
+    BALL_SIGHTINGS,
+    FIELD_FEATURES,
+    POLE_SIGHTINGS,
+    ROBOT_SIGHTINGS,
+)
 from perception.vision.colour_filter import ColourPoleDetector
 from spl_env.robots.nao import NaoRobot
 from spl_env.scenes.spl_field import SplFieldScene
+from spl_env.sensors.emulation.ball import GeometricBallSightings
 from spl_env.sensors.emulation.field import GeometricFieldFeatures
 from spl_env.sensors.emulation.poles import GeometricPoleCamera, GeometricPoleSightings
 from spl_env.sensors.emulation.robots import GeometricRobotSightings
@@ -50,6 +56,24 @@ def _vision_robot_sightings(
     )
 
 
+def _cnn_ball_sightings(bottom: bool) -> EmulatorFactory:
+    """The emulator of the top camera's ball sightings, and the bottom one's with ``bottom``."""
+
+    def build(
+        scene: SplFieldScene, robots: list[NaoRobot], sensors: RigConfig, perception: PipelineConfig
+    ) -> GeometricBallSightings:
+        radius = scene.dimensions.ball_diameter_m / 2
+        return GeometricBallSightings(
+            sensors.geometric_ball,
+            sensors.camera.model,
+            scene.bodies.ball,
+            radius,
+            bottom=sensors.geometric_ball_bottom if bottom else None,
+        )
+
+    return build
+
+
 def _field_features(bottom: bool) -> EmulatorFactory:
     """The emulator of the top camera's field features, and the bottom one's with ``bottom``."""
 
@@ -70,6 +94,8 @@ EMULATORS: Mapping[tuple[str, str], EmulatorFactory] = {
     (POLE_SIGHTINGS, "colour"): _colour_pole_sightings,
     (ROBOT_SIGHTINGS, "cnn"): _cnn_robot_sightings,
     (ROBOT_SIGHTINGS, "vision"): _vision_robot_sightings,
+    (BALL_SIGHTINGS, "cnn"): _cnn_ball_sightings(bottom=False),
+    (BALL_SIGHTINGS, "cnn_both_cameras"): _cnn_ball_sightings(bottom=True),
     (FIELD_FEATURES, "vision"): _field_features(bottom=False),
     (FIELD_FEATURES, "vision_both_cameras"): _field_features(bottom=True),
 }

@@ -21,7 +21,6 @@ said beside each.
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass
 
@@ -33,6 +32,7 @@ from perception.tracking.sonar_filter import SonarFilterConfig, audible
 from perception.types import CameraModel, CameraState, RobotSighting
 from perception.validation import check_in_interval, check_positive
 from spl_env.robots.nao import NaoRobot
+from spl_env.sensors.emulation.bands import RangeBands
 from spl_env.sim.world import BulletWorld
 
 CENTRE_HEIGHT_M = 0.3  # a standing Nao's body centre above the ground (jersey, waistband)
@@ -40,16 +40,12 @@ _OWNER = "GeometricRobotConfig"
 
 
 @dataclass(frozen=True, kw_only=True)
-class GeometricRobotConfig:
-    """Detection chance and noise of one front end's emulated robot sightings (module doc).
-
-    ``band_edges_m`` (B,) (m, increasing) split the ranges into B + 1 bands; ``recall``,
-    ``range_std_fraction`` (range noise std / range) and ``bearing_std_rad`` (rad) hold one
-    value per band. ``sonar_range_std_fraction``: range noise std / range of a sonar-confirmed
-    sighting.
+class GeometricRobotConfig(RangeBands):
+    """Detection chance and noise per range band (:class:`RangeBands`) of one front end's
+    emulated robot sightings (module doc). ``sonar_range_std_fraction``: range noise std /
+    range of a sonar-confirmed sighting.
     """
 
-    band_edges_m: tuple[float, ...] = ()
     recall: tuple[float, ...] = (0.94,)
     range_std_fraction: tuple[float, ...] = (0.043,)
     bearing_std_rad: tuple[float, ...] = (math.radians(0.65),)
@@ -60,41 +56,17 @@ class GeometricRobotConfig:
     sonar_range_std_fraction: float = 0.01
 
     def __post_init__(self) -> None:
-        edges = self.band_edges_m
-        if not (
-            isinstance(edges, tuple)
-            and all(isinstance(e, (int, float)) and math.isfinite(e) and e > 0 for e in edges)
-            and all(a < b for a, b in itertools.pairwise(edges))
-        ):
-            raise ValueError(
-                f"{_OWNER}.band_edges_m must be a tuple of increasing ranges > 0, got {edges!r}"
+        super().__post_init__()
+        for name in ("team_probability", "sonar_confirm_probability"):
+            check_in_interval(
+                _OWNER, name, getattr(self, name), 0, 1, low_inclusive=True, high_inclusive=True
             )
-        chances = {"team_probability": self.team_probability}
-        chances["sonar_confirm_probability"] = self.sonar_confirm_probability
-        for name in ("recall", "range_std_fraction", "bearing_std_rad"):
-            values = getattr(self, name)
-            if not (isinstance(values, tuple) and len(values) == len(edges) + 1):
-                raise ValueError(
-                    f"{_OWNER}.{name} must hold one value per band ({len(edges) + 1}), "
-                    f"got {values!r}"
-                )
-            for k, value in enumerate(values):
-                if name == "recall":
-                    chances[f"recall[{k}]"] = value
-                else:
-                    check_positive(_OWNER, f"{name}[{k}]", value)
-        for name, value in chances.items():
-            check_in_interval(_OWNER, name, value, 0, 1, low_inclusive=True, high_inclusive=True)
         for name in ("max_range_m", "sonar_range_std_fraction"):
             check_positive(_OWNER, name, getattr(self, name))
         if not isinstance(self.sonar_check, bool):
             raise TypeError(
                 f"{_OWNER}.sonar_check must be a bool, got {type(self.sonar_check).__name__}"
             )
-
-    def band(self, range_m: float) -> int:
-        """The index of the band holding ``range_m`` (m)."""
-        return int(np.searchsorted(self.band_edges_m, range_m, side="right"))
 
 
 # The CNN front end on rendered frames of whole, unoccluded robots 1-3 m away

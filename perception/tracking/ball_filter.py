@@ -1,0 +1,355 @@
+"""A Kalman filter of the ball relative to our robot: rolling with friction, kicks as velocity
+jumps, our own kicks known.
+
+The state ``(x, y, vx, vy)`` (m, m/s) is the ball's position and ground velocity in the robot
+frame (egocentric, as B-Human's ball model): sightings are measured there, and a correction of
+the believed pose (a pole sighting) does not move the ball relative to the robot. The field
+frame's estimate is that state composed with the believed pose, the pose's covariance added
+(:func:`ball_in_field`).
+
+Between frames the ball rolls straight and slows at a constant deceleration
+``deceleration_mps2`` (rolling friction, Coulomb-like: the simulator's ball loses 0.11 m/s per
+second at every speed once it rolls) until it stops::
+
+    speed' = max(speed - a dt, 0),   position' = position + direction * (distance rolled)
+
+and then the robot's own motion since the last frame (the odometry's ``(dx, dy, dθ)``) moves
+the frame: ``p' = R(-dθ) (p - d)``, ``v' = R(-dθ) v``. The mean follows both exactly; the
+covariance takes the friction as a known input, rolling the uncertainty on at constant velocity
+(a friction Jacobian would collapse the velocity's variance of a ball believed nearly at rest
+every frame, and with it any chance to see a kick coming), plus the
+discrete white acceleration noise of spectral density ``acceleration_psd`` and the odometry's
+noise (``odometry_translation_std_fraction`` of the distance walked, ``odometry_turn_std_fraction``
+of the turn plus ``odometry_turn_std_floor_rad``).
+
+Each frame's ball sightings (range, bearing) become robot-frame points with covariance
+``J cov J^T``. The sighting nearest the prediction (Mahalanobis) is fused when it passes the
+chi-square gate at ``gate_probability``. When none passes, the ball may have been kicked since
+the last frame: the prediction is made again from the last frame with the velocity's covariance
+grown by ``kick_velocity_std_mps`` squared per axis (a velocity jump of that size at the last
+frame), and the gate tried again. A sighting still outside is kept as a candidate; when the next
+frame's sighting agrees with it (within the gate of their joint covariance, after the robot's
+motion) and still not with the filter, the filter restarts there (the ball was moved, or the
+filter had followed a false sighting). The first sighting starts the filter at rest with
+velocity std ``initial_velocity_std_mps``.
+
+Our own kicks are known to the robot's motion: a kick's intended velocity (robot frame) given to
+a ball believed in front of the feet (``own_kick_reach_m`` ahead, ``own_kick_half_width_m`` to
+either side) sets the ball's velocity to that kick's rolling
+velocity (``own_kick_rolling_fraction`` of it) with std ``own_kick_std_mps`` on each axis,
+forgetting the velocity's correlations.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from perception.estimation.gating import chi2_threshold, mahalanobis_squared
+from perception.estimation.kalman import joseph_update
+from perception.geometry import FloatArray, rot_z
+from perception.tracking.robot_tracker import sighting_in_field
+from perception.types import BallEstimate, BallSighting, SlamEstimate
+from perception.validation import check_in_interval, check_positive, check_probability
+
+_OWNER = "BallFilterConfig"
+_H = np.hstack([np.eye(2), np.zeros((2, 2))])  # the sightings measure the position
+_ORIGIN, _NO_POSE_COV = np.zeros(3), np.zeros((3, 3))  # a sighting in the robot's own frame
+
+
+@dataclass(frozen=True, kw_only=True)
+class BallFilterConfig:
+    """Motion model, noise and gating of :class:`BallFilter` (module doc)."""
+
+    # Rolling friction (m/s^2): the simulator's ball (spl_env scene, rolling friction 0.0015)
+    # slows by 0.106-0.128 m/s per second at 0.3-1.4 m/s once it rolls.
+    deceleration_mps2: float = 0.11
+    acceleration_psd: float = 0.05  # white acceleration noise (m^2/s^3) on each axis
+    initial_velocity_std_mps: float = 0.5  # a ball first seen is at rest, give or take this
+    kick_velocity_std_mps: float = 2.0  # a kick's velocity jump (m/s) per axis
+    # chi-square gate (2 dof) of a sighting against the filter: a sighting outside it is taken
+    # for a kick, so a genuine one should rarely fall outside (1 in 1000)
+    gate_probability: float = 0.999
+    # The walk odometry's noise as the filter takes it (a share of each step's distance and
+    # turn, and a floor on the turn's std per frame)
+    odometry_translation_std_fraction: float = 0.1
+    odometry_turn_std_fraction: float = 0.1
+    odometry_turn_std_floor_rad: float = 0.002
+    # Our own kick: a ball believed in front of our feet (up to own_kick_reach_m ahead of our
+    # centre, own_kick_half_width_m to either side: the Nao's kick zone and a little more) takes
+    # the kick's velocity times own_kick_rolling_fraction (the simulator's kicked ball slides,
+    # then rolls at 5/7 of the kick's speed: 1.42 of 2.0 m/s measured), give or take
+    # own_kick_std_mps.
+    own_kick_reach_m: float = 0.3
+    own_kick_half_width_m: float = 0.15
+    own_kick_rolling_fraction: float = 0.71
+    own_kick_std_mps: float = 0.3
+
+    def __post_init__(self) -> None:
+        check_positive(_OWNER, "deceleration_mps2", self.deceleration_mps2, allow_zero=True)
+        for name in (
+            "acceleration_psd",
+            "initial_velocity_std_mps",
+            "kick_velocity_std_mps",
+            "own_kick_reach_m",
+            "own_kick_half_width_m",
+            "own_kick_std_mps",
+        ):
+            check_positive(_OWNER, name, getattr(self, name))
+        for name in (
+            "odometry_translation_std_fraction",
+            "odometry_turn_std_fraction",
+            "odometry_turn_std_floor_rad",
+        ):
+            check_positive(_OWNER, name, getattr(self, name), allow_zero=True)
+        check_probability(_OWNER, "gate_probability", self.gate_probability, float_only=True)
+        check_in_interval(
+            _OWNER,
+            "own_kick_rolling_fraction",
+            self.own_kick_rolling_fraction,
+            0.0,
+            1.0,
+            high_inclusive=True,
+        )
+
+    @property
+    def gate_threshold(self) -> float:
+        """Chi-square (2 dof) quantile at ``gate_probability``."""
+        return chi2_threshold(self.gate_probability, 2)
+
+
+def rolling_model(
+    state: FloatArray, dt: float, config: BallFilterConfig
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The state (4,) after ``dt`` >= 0 s of rolling in a fixed frame (module doc), with the
+    covariance's ``F`` (4, 4) (constant velocity) and white-acceleration ``Q`` (4, 4)."""
+    speed = float(math.hypot(state[2], state[3]))
+    a = config.deceleration_mps2
+    rolling_s = min(dt, speed / a) if a > 0 else dt
+    distance = speed * rolling_s - 0.5 * a * rolling_s**2
+    factor = max(speed - a * dt, 0.0) / speed if speed > 0 else 1.0
+    travel = distance / speed if speed > 0 else dt  # seconds of the current velocity travelled
+    predicted = np.array(
+        [
+            state[0] + travel * state[2],
+            state[1] + travel * state[3],
+            factor * state[2],
+            factor * state[3],
+        ]
+    )
+    eye, zero = np.eye(2), np.zeros((2, 2))
+    F = np.block([[eye, dt * eye], [zero, eye]])  # the covariance's: constant velocity
+    q = config.acceleration_psd
+    Q = q * np.block([[dt**3 / 3 * eye, dt**2 / 2 * eye], [dt**2 / 2 * eye, dt * eye]])
+    return predicted, F, Q
+
+
+def moved_frame(
+    state: FloatArray, odometry: FloatArray, config: BallFilterConfig
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The state (4,) seen from the robot frame after the robot's motion ``odometry`` (3,)
+    ``(dx, dy, dθ)`` (in the old frame), with the map's Jacobian ``G`` (4, 4) and the
+    odometry's noise ``Q`` (4, 4) (module doc)."""
+    dx, dy, dtheta = (float(v) for v in odometry)
+    back = rot_z(-dtheta)[:2, :2]
+    offset = state[:2] - np.array([dx, dy])
+    moved = np.concatenate([back @ offset, back @ state[2:]])
+    G = np.zeros((4, 4))
+    G[:2, :2] = G[2:, 2:] = back
+    turn_std = config.odometry_turn_std_fraction * abs(dtheta) + config.odometry_turn_std_floor_rad
+    walk_std = config.odometry_translation_std_fraction * math.hypot(dx, dy)
+    turn_jacobian = np.array([[0.0, 1.0], [-1.0, 0.0]]) @ back  # d(back)/d(dθ)
+    Q = np.zeros((4, 4))
+    Q[:2, :2] = walk_std**2 * np.eye(2)
+    position_turn = turn_jacobian @ offset
+    velocity_turn = turn_jacobian @ state[2:]
+    both = np.concatenate([position_turn, velocity_turn])
+    Q += turn_std**2 * np.outer(both, both)
+    return moved, G, Q
+
+
+def ball_in_field(
+    relative: FloatArray, relative_cov: FloatArray, pose: FloatArray, pose_cov: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """The ball's field-frame state (4,) and covariance (4, 4) from its robot-frame ``relative``
+    (4,) with ``relative_cov`` (4, 4), seen from ``pose`` (3,) with ``pose_cov`` (3, 3) (first
+    order; the two independent)."""
+    turn = rot_z(pose[2])[:2, :2]
+    state = np.concatenate([pose[:2] + turn @ relative[:2], turn @ relative[2:]])
+    J_rel = np.zeros((4, 4))
+    J_rel[:2, :2] = J_rel[2:, 2:] = turn
+    d_turn = np.array([[0.0, -1.0], [1.0, 0.0]]) @ turn  # d(turn)/dθ
+    J_pose = np.zeros((4, 3))
+    J_pose[:2, :2] = np.eye(2)
+    J_pose[:2, 2] = d_turn @ relative[:2]
+    J_pose[2:, 2] = d_turn @ relative[2:]
+    cov = J_rel @ relative_cov @ J_rel.T + J_pose @ pose_cov @ J_pose.T
+    return state, 0.5 * (cov + cov.T)
+
+
+class BallFilter:
+    """The ball's egocentric Kalman filter (module doc); :meth:`update` once per frame."""
+
+    def __init__(self, config: BallFilterConfig | None = None) -> None:
+        self.config = config if config is not None else BallFilterConfig()
+        self._gate = self.config.gate_threshold
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the ball."""
+        self._state = np.zeros(4)
+        self._cov = np.eye(4)
+        self._known = False
+        self._last_seen_s = -math.inf
+        self._time_s: float | None = None
+        self._candidate: tuple[FloatArray, FloatArray] | None = None
+
+    def estimate(self, self_pose: SlamEstimate) -> BallEstimate:
+        """What the filter believes now, placed on the field from ``self_pose``."""
+        field_state, field_cov = ball_in_field(
+            self._state, self._cov, self_pose.pose, self_pose.pose_cov
+        )
+        return BallEstimate(
+            state=field_state if self._known else np.zeros(4),
+            cov=field_cov if self._known else self._cov.copy(),
+            relative=self._state.copy(),
+            relative_cov=self._cov.copy(),
+            known=self._known,
+            last_seen_s=self._last_seen_s,
+        )
+
+    def update(
+        self,
+        time_s: float,
+        sightings: Sequence[BallSighting],
+        odometry: FloatArray,
+        self_pose: SlamEstimate,
+        kick_velocity: FloatArray | None = None,
+    ) -> BallEstimate:
+        """Roll on to ``time_s`` (s, not before the last update) and move with the robot's
+        ``odometry`` (3,) since the last frame; take our own kick since then (``kick_velocity``
+        (2,) m/s, robot frame, zero or None for none); fuse this frame's ``sightings`` (robot
+        frame). Returns the estimate placed on the field from ``self_pose``."""
+        if not math.isfinite(time_s):
+            raise ValueError(f"time_s must be finite, got {time_s}")
+        if self._time_s is not None and time_s < self._time_s:
+            raise ValueError(f"time_s must not go back: {time_s} after {self._time_s}")
+        odometry = np.asarray(odometry, dtype=np.float64)
+        if odometry.shape != (3,) or not np.isfinite(odometry).all():
+            raise ValueError(f"odometry must be 3 finite numbers, got {odometry!r}")
+        dt = 0.0 if self._time_s is None else time_s - self._time_s
+        before = (self._state, self._cov)
+        if self._known and kick_velocity is not None and np.any(kick_velocity):
+            before = self._kicked_by_us(np.asarray(kick_velocity, dtype=np.float64))
+        if self._known:
+            self._state, self._cov = self._predicted(*before, dt, odometry)
+            if self._candidate is not None:
+                self._candidate = self._moved_point(self._candidate, odometry)
+        self._time_s = time_s
+        measurements = [
+            sighting_in_field(_ORIGIN, _NO_POSE_COV, s.range_m, s.bearing_rad, s.cov)
+            for s in sightings
+        ]
+        if measurements:
+            self._fuse(measurements, time_s, before, dt, odometry)
+        else:
+            self._candidate = None  # a candidate needs the very next frame's agreement
+        return self.estimate(self_pose)
+
+    def _kicked_by_us(self, kick_velocity: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """The state and covariance of the last frame after our kick of ``kick_velocity`` (2,):
+        the kick's rolling velocity for a ball within reach, else unchanged."""
+        c = self.config
+        ahead, aside = self._state[:2]
+        if not (0.0 < ahead <= c.own_kick_reach_m and abs(aside) <= c.own_kick_half_width_m):
+            return self._state, self._cov
+        state = np.concatenate([self._state[:2], c.own_kick_rolling_fraction * kick_velocity])
+        cov = self._cov.copy()
+        cov[2:, :] = 0.0
+        cov[:, 2:] = 0.0
+        cov[2:, 2:] = c.own_kick_std_mps**2 * np.eye(2)
+        return state, cov
+
+    def _predicted(
+        self, state: FloatArray, cov: FloatArray, dt: float, odometry: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """``state`` (4,) and ``cov`` (4, 4) rolled on by ``dt`` s, then moved with the robot's
+        ``odometry`` (3,) (module doc)."""
+        state, F, Q = rolling_model(state, dt, self.config)
+        cov = F @ cov @ F.T + Q
+        state, G, Q_odometry = moved_frame(state, odometry, self.config)
+        cov = G @ cov @ G.T + Q_odometry
+        return state, 0.5 * (cov + cov.T)
+
+    def _moved_point(
+        self, point: tuple[FloatArray, FloatArray], odometry: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """A resting point ``(z (2,), R (2, 2))`` of the last frame seen from this frame."""
+        state, G, Q = moved_frame(np.array([*point[0], 0.0, 0.0]), odometry, self.config)
+        R = G[:2, :2] @ point[1] @ G[:2, :2].T + Q[:2, :2]
+        return state[:2], 0.5 * (R + R.T)
+
+    def _fuse(
+        self,
+        measurements: list[tuple[FloatArray, FloatArray]],
+        time_s: float,
+        before: tuple[FloatArray, FloatArray],
+        dt: float,
+        odometry: FloatArray,
+    ) -> None:
+        """Fuse the measurement that fits best (module doc); a restart or a candidate else.
+        ``before`` is the state and covariance before this frame's prediction."""
+        if not self._known:
+            self._start(*measurements[0], time_s)
+            return
+        best = self._nearest(measurements)
+        if best is None:  # perhaps kicked since the last frame: a velocity jump then
+            kicked_cov = before[1].copy()
+            kicked_cov[2:, 2:] += self.config.kick_velocity_std_mps**2 * np.eye(2)
+            unkicked = (self._state, self._cov)
+            self._state, self._cov = self._predicted(before[0], kicked_cov, dt, odometry)
+            best = self._nearest(measurements)
+            if best is None:
+                self._state, self._cov = unkicked
+        if best is not None:
+            z, R = best
+            self._state, self._cov = joseph_update(
+                self._state, self._cov, z - self._state[:2], _H, R
+            )
+            self._last_seen_s = time_s
+            self._candidate = None
+            return
+        z, R = measurements[0]
+        if self._candidate is not None and self._agrees(self._candidate, (z, R)):
+            self._start(z, R, time_s)
+        else:
+            self._candidate = (z, R)
+
+    def _nearest(
+        self, measurements: list[tuple[FloatArray, FloatArray]]
+    ) -> tuple[FloatArray, FloatArray] | None:
+        """The measurement with the least Mahalanobis distance to the prediction, if within the
+        gate."""
+        P = self._cov[:2, :2]
+        distances = [
+            float(mahalanobis_squared(z - self._state[:2], P + R)) for z, R in measurements
+        ]
+        k = int(np.argmin(distances))
+        return measurements[k] if distances[k] <= self._gate else None
+
+    def _agrees(self, a: tuple[FloatArray, FloatArray], b: tuple[FloatArray, FloatArray]) -> bool:
+        """Whether two robot-frame measurements ``(z, R)`` can show the same resting ball."""
+        return float(mahalanobis_squared(a[0] - b[0], a[1] + b[1])) <= self._gate
+
+    def _start(self, z: FloatArray, R: FloatArray, time_s: float) -> None:
+        """Start (or restart) the filter at the measurement ``z`` (2,) with covariance ``R``."""
+        self._state = np.array([z[0], z[1], 0.0, 0.0])
+        self._cov = np.zeros((4, 4))
+        self._cov[:2, :2] = R
+        self._cov[2:, 2:] = self.config.initial_velocity_std_mps**2 * np.eye(2)
+        self._known = True
+        self._last_seen_s = time_s
+        self._candidate = None

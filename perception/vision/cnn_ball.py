@@ -1,0 +1,163 @@
+"""Ball sightings from the CNN's ``ball`` detections.
+
+The CNN (:mod:`perception.vision.cnn_detector`) boxes the ball it sees; a sphere's silhouette
+is a disc centred (to well under a pixel at the ball's sizes in our images) on the projection of
+its centre, so the box centre shows the ball's centre, which lies ``radius_m`` above the ground.
+Per ``ball`` detection scoring at least ``score_threshold`` (:func:`ball_sightings`):
+
+1. a box within ``border_margin_px`` of an image edge is dropped: the ball is cut off there and
+   the box centre is not the ball's;
+2. the ray through the box centre (moved ``row_offset_px`` down: a renderer's row offset)
+   meets the plane ``z = radius_m`` (:func:`perception.vision.ground_point.height_point`): the
+   range and bearing of the ball's centre; none when the box centre lies above the horizon
+   (the ray never descends to it);
+3. a box whose width says the ball is much nearer or farther than that (the apparent diameter
+   ``2 r f / d`` off by more than ``size_tolerance`` of itself) is dropped: something round and
+   white that is not the ball on the ground (a robot's part, a ball in the air);
+4. the covariance propagates an independent pixel noise of std
+   ``hypot(pixel_std_px * downscale, pixel_std_per_size * box width)`` on the centre's ``u``
+   and ``v`` (``downscale``: the image was read at that fraction of its resolution)
+   (:func:`perception.vision.ground_point.range_bearing_cov`).
+
+Sightings come best score first; the fitted numbers and where they come from are in
+:class:`CnnBallConfig`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from perception.geometry import FloatArray
+from perception.types import BallSighting, CameraModel, CameraState
+from perception.validation import (
+    check_in_interval,
+    check_int,
+    check_positive,
+    check_probability,
+    finite_vector,
+)
+from perception.vision.ground_point import height_point, range_bearing_cov
+
+if TYPE_CHECKING:
+    from perception.vision.cnn_detector import Detection
+
+BALL_CLASS = "ball"  # the CNN's class of the ball (perception.vision.cnn_detector.OBJECT_CLASSES)
+_OWNER = "CnnBallConfig"
+
+
+@dataclass(frozen=True, kw_only=True)
+class CnnBallConfig:
+    """Thresholds, the ball's size and the noise model of :func:`ball_sightings` (module doc).
+
+    The noise numbers were fitted on the CNN's boxes of the ball in rendered frames of the
+    tuning seeds (``python benchmarks/ball_detection.py``, seeds 0-4).
+    """
+
+    score_threshold: float = 0.4  # the detector's own threshold (CnnDetectorConfig)
+    radius_m: float = 0.05  # SPL ball: 0.1 m across (perception.field.dimensions)
+    border_margin_px: float = 1.0  # a box this close (px) to an image edge is cut off
+    # Std (px) of the box centre: a floor plus a part proportional to the box width
+    # (maximum-likelihood fit on 543 boxes of the tuning seeds: 1.15 px and 0.0475).
+    pixel_std_px: float = 1.15
+    pixel_std_per_size: float = 0.0475
+    # A box whose width is off the width the ball would have at the range read from its
+    # centre by more than this fraction of it is not the ball on the ground.
+    size_tolerance: float = 0.6
+    # The image shows this many rows higher than the camera model says (PyBullet's tiny
+    # renderer: 1.0, perception.vision.field_features); 0 for a camera that obeys the model.
+    row_offset_px: float = 0.0
+    # The bottom camera's images are read at 1/bottom_downscale of their resolution (the
+    # ball near the feet is larger than any the CNN saw in training: at full resolution it
+    # finds 5 % of the balls nearer than 0.3 m, at half 82 %; rendered bottom-camera frames)
+    bottom_downscale: int = 2
+
+    def __post_init__(self) -> None:
+        check_probability(_OWNER, "score_threshold", self.score_threshold, float_only=True)
+        check_positive(_OWNER, "radius_m", self.radius_m)
+        check_positive(_OWNER, "border_margin_px", self.border_margin_px, allow_zero=True)
+        check_positive(_OWNER, "pixel_std_px", self.pixel_std_px)
+        check_positive(_OWNER, "pixel_std_per_size", self.pixel_std_per_size, allow_zero=True)
+        check_positive(_OWNER, "size_tolerance", self.size_tolerance)
+        check_in_interval(_OWNER, "row_offset_px", self.row_offset_px, -5.0, 5.0)
+        check_int(_OWNER, "bottom_downscale", self.bottom_downscale, 1)
+
+    def pixel_std(self, box: FloatArray, downscale: int = 1) -> float:
+        """Std (px) of the centre of a box (4,) ``(u0, v0, u1, v1)`` found in the image read at
+        1/``downscale`` resolution (the floor scales with it: fitted on the bottom camera at
+        half resolution, 2.2 px and 0.06)."""
+        floor = self.pixel_std_px * downscale
+        return math.hypot(floor, self.pixel_std_per_size * float(box[2] - box[0]))
+
+
+def ball_sightings(
+    detections: Sequence[Detection],
+    camera: CameraModel,
+    state: CameraState,
+    config: CnnBallConfig,
+    downscale: int = 1,
+) -> tuple[BallSighting, ...]:
+    """Sightings (robot frame) of the ball among ``detections`` (the CNN's, any classes) in a
+    frame of ``camera`` taken from ``state`` and read at 1/``downscale`` resolution: one per
+    ``ball`` detection scoring at least ``config.score_threshold`` that the module doc's steps
+    keep, best score first.
+
+    Raises ValueError if such a detection's box is not 4 finite numbers.
+    """
+    found = []
+    for k, detection in enumerate(detections):
+        if detection.class_name != BALL_CLASS or detection.score < config.score_threshold:
+            continue
+        box = finite_vector(detection.box, f"detections[{k}].box", 4)
+        sighting = _box_sighting(box, float(detection.score), camera, state, config, downscale)
+        if sighting is not None:
+            found.append(sighting)
+    return tuple(sorted(found, key=lambda s: -s.score))
+
+
+def _box_sighting(
+    box: FloatArray,
+    score: float,
+    camera: CameraModel,
+    state: CameraState,
+    config: CnnBallConfig,
+    downscale: int,
+) -> BallSighting | None:
+    """Steps 1-4 of the module doc for one ball box (4,)."""
+    if not (box[2] > box[0] and box[3] > box[1]) or _cut_off(box, camera, config):
+        return None
+    centre = np.array([(box[0] + box[2]) / 2, (box[1] + box[3]) / 2 + config.row_offset_px])
+    point = height_point(centre, config.radius_m, camera, state)
+    if point is None:
+        return None
+    range_m, bearing_rad = point
+    camera_distance = math.dist(
+        (range_m * math.cos(bearing_rad), range_m * math.sin(bearing_rad), config.radius_m),
+        tuple(state.position),
+    )
+    expected_width = 2 * config.radius_m * camera.fx / camera_distance
+    if abs(float(box[2] - box[0]) - expected_width) > config.size_tolerance * expected_width:
+        return None
+    std = config.pixel_std(box, downscale)
+    cov = range_bearing_cov(centre, camera, state, std, config.radius_m)
+    if cov is None:
+        return None
+    return BallSighting(
+        range_m=range_m, bearing_rad=bearing_rad, cov=cov, box=box.copy(), score=score
+    )
+
+
+def _cut_off(box: FloatArray, camera: CameraModel, config: CnnBallConfig) -> bool:
+    """Whether a box (4,) lies within ``config.border_margin_px`` of an image edge (pixel
+    centres run from 0 to width - 1 and height - 1; the image's edges are half a pixel out)."""
+    margin = config.border_margin_px - 0.5
+    return bool(
+        box[0] < margin
+        or box[1] < margin
+        or box[2] > camera.width - 1 - margin
+        or box[3] > camera.height - 1 - margin
+    )

@@ -1,0 +1,133 @@
+"""Goalie: keep the ball out of our goal against a scripted kicker, on what perception
+believes."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from perception.geometry import FloatArray
+from perception.representations import PerceptionOutput
+from perception.validation import check_positive
+from spl_env.robots.nao import NaoCommand, NaoRobot, walk_target
+from spl_env.tasks.base import TaskContext
+from spl_env.tasks.soccer import SoccerTask, SoccerTaskConfig, ball_in_goal, ball_out, goal_centre
+from spl_env.tasks.soccer_skills import approach_and_kick
+from spl_env.world_state import WorldState
+
+
+@dataclass(frozen=True, kw_only=True)
+class GoalieTaskConfig(SoccerTaskConfig):
+    """Where the shot comes from, and the goalie's rewards; ``n_other_robots`` is the kicker
+    plus others walking about."""
+
+    episode_s: float = 30.0
+    shot_distance_m: tuple[float, float] = (1.5, 3.5)  # the ball starts this far out (m)
+    save_reward: float = 1.0  # reward when a kicked ball stops (or leaves) without a goal
+    kicked_speed_mps: float = 0.3  # a ball this fast has been kicked
+    stopped_speed_mps: float = 0.05  # a kicked ball this slow is over
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        owner = type(self).__name__
+        if self.n_other_robots < 1:
+            raise ValueError(
+                f"{owner}.n_other_robots must be >= 1 (the kicker), got {self.n_other_robots}"
+            )
+        low, high = self.shot_distance_m
+        if not 0.5 <= low <= high:
+            raise ValueError(
+                f"{owner}.shot_distance_m must be (low, high) with 0.5 <= low <= high, got "
+                f"{self.shot_distance_m}"
+            )
+        check_positive(owner, "save_reward", self.save_reward, allow_zero=True)
+        for name in ("kicked_speed_mps", "stopped_speed_mps"):
+            check_positive(owner, name, getattr(self, name))
+        if not self.stopped_speed_mps < self.kicked_speed_mps:
+            raise ValueError(
+                f"{owner}.stopped_speed_mps must be < kicked_speed_mps, got "
+                f"{self.stopped_speed_mps} and {self.kicked_speed_mps}"
+            )
+
+
+class GoalieTask(SoccerTask):
+    """Our robot starts on its goal line (at -x) facing the field; the ball lies
+    ``shot_distance_m`` out in front of the goal; the kicker (the first scripted robot, the
+    other team) starts 0.5-1 m behind the ball, walks up to it and kicks it once at full
+    strength at a random point between our posts
+    (:func:`spl_env.tasks.soccer_skills.approach_and_kick`); others walk to random waypoints.
+
+    Reward terms: ``goal`` -goal_reward when the ball is in our goal; ``save`` +save_reward
+    when a kicked ball stops slower than ``stopped_speed_mps`` or leaves the field other than
+    through our goal. Terminated then, or on a goal.
+    """
+
+    config: GoalieTaskConfig
+
+    def __init__(self, config: GoalieTaskConfig, context: TaskContext) -> None:
+        super().__init__(config, context)
+        self._target = np.zeros(2)
+        self._kicked = False
+
+    def our_start(self, rng: np.random.Generator) -> FloatArray:
+        self._kicked = False
+        dims = self.context.dimensions
+        return np.array([-dims.half_length_m + 0.2, rng.uniform(-0.3, 0.3), 0.0])
+
+    def place_scripted(
+        self, rng: np.random.Generator, others: Sequence[NaoRobot], placed: list[NaoRobot]
+    ) -> FloatArray:
+        dims = self.context.dimensions
+        angle = rng.uniform(-0.9, 0.9)
+        distance = rng.uniform(*self.config.shot_distance_m)
+        ball = goal_centre(dims, -1) + distance * np.array([np.cos(angle), np.sin(angle)])
+        behind = rng.uniform(0.5, 1.0)
+        kicker, rest = others[0], others[1:]
+        kicker.place(
+            np.array([*(ball + behind * np.array([np.cos(angle), np.sin(angle)])), angle + np.pi])
+        )
+        placed.append(kicker)
+        self.wanderers.reset(rng, rest, self.context.placement, placed)
+        half = dims.goal_inner_width_m / 2 - dims.ball_diameter_m
+        self._target = np.array([-dims.half_length_m - 0.3, rng.uniform(-half, half)])
+        return ball
+
+    def scripted_commands(self, state: WorldState) -> list[NaoCommand]:
+        others = state.others
+        robot = self.context.robot
+        kicker = NaoCommand()  # after its kick the kicker stands
+        if not self._kicked:
+            skill = approach_and_kick(
+                state.poses[others[0]], state.ball, self._target, robot, self.config.skills
+            )
+            kicker = NaoCommand(
+                walk=walk_target(robot, skill.walk),
+                kick=skill.kick,
+                kick_angle_rad=skill.kick_angle_rad,
+            )
+        walks = self.wanderers.commands(
+            state.poses[others[1:]], self.context.control_dt_s, state.blocked[others[1:]]
+        )
+        return [kicker, *(NaoCommand(walk=walk) for walk in walks)]
+
+    def _over(self, state: WorldState) -> tuple[bool, bool]:
+        """Whether a goal was conceded, and whether the shot is otherwise over (saved)."""
+        dims = self.context.dimensions
+        conceded = ball_in_goal(state.ball, dims) == -1
+        speed = float(np.hypot(*state.ball_velocity))
+        self._kicked = self._kicked or speed >= self.config.kicked_speed_mps
+        stopped = self._kicked and speed < self.config.stopped_speed_mps
+        saved = not conceded and (stopped or ball_out(state.ball, dims))
+        return conceded, saved
+
+    def reward_terms(self, state: WorldState, output: PerceptionOutput) -> dict[str, float]:
+        conceded, saved = self._over(state)
+        return {
+            "goal": -self.config.goal_reward * conceded,
+            "save": self.config.save_reward * saved,
+        }
+
+    def terminated(self, state: WorldState, output: PerceptionOutput) -> bool:
+        return any(self._over(state))

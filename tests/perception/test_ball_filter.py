@@ -1,0 +1,686 @@
+"""The ball's Kalman filter against independent truths: the rolling-with-friction motion worked
+out by hand (v t - a t^2 / 2, stopping without reversal), the white-acceleration covariance as
+an integral, the robot's own motion as a frame change (and its noise by finite differences), a
+Kalman step computed here with numpy, simulated rolling and kicked balls seen from a walking
+robot with chi-square bands on the NEES, and the gate's candidate restart."""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Sequence
+
+import numpy as np
+import pytest
+from numpy.typing import ArrayLike
+from scipy.stats import chi2
+
+from perception.geometry import FloatArray
+from perception.tracking.ball_filter import (
+    BallFilter,
+    BallFilterConfig,
+    moved_frame,
+    rolling_model,
+)
+from perception.types import BallEstimate, BallSighting, SlamEstimate
+
+COV = np.diag([0.04**2, 0.015**2])  # (m², rad²) range and bearing noise of a sighting
+EXACT = np.zeros((3, 3))  # covariance of an exactly known pose
+STILL = np.zeros(3)  # odometry of a robot standing still
+DT = 0.1  # s between frames
+
+
+def self_pose(pose: ArrayLike, pose_cov: ArrayLike = EXACT) -> SlamEstimate:
+    """A SlamEstimate with ``pose`` (3,) and ``pose_cov`` (3, 3) and no landmarks."""
+    return SlamEstimate(
+        pose=np.asarray(pose, dtype=np.float64),
+        pose_cov=np.asarray(pose_cov, dtype=np.float64),
+        landmark_ids=np.zeros(0, dtype=np.int64),
+        landmarks=np.zeros((0, 2)),
+        landmark_covs=np.zeros((0, 2, 2)),
+    )
+
+
+def sighting(range_m: float, bearing_rad: float, cov: ArrayLike = COV) -> BallSighting:
+    return BallSighting(
+        range_m=float(range_m), bearing_rad=float(bearing_rad), cov=np.asarray(cov, np.float64)
+    )
+
+
+def observe(
+    pose: ArrayLike, point: ArrayLike, rng: np.random.Generator | None = None, cov: FloatArray = COV
+) -> BallSighting:
+    """The sighting of the field ``point`` (2,) from the true ``pose`` (3,), with noise drawn
+    from ``cov`` when ``rng`` is given."""
+    x, y, theta = np.asarray(pose, dtype=np.float64)
+    dx, dy = np.asarray(point, dtype=np.float64)[:2] - (x, y)
+    z = np.array([math.hypot(dx, dy), math.atan2(dy, dx) - theta])
+    if rng is not None:
+        z = z + np.linalg.cholesky(cov) @ rng.standard_normal(2)
+    return sighting(z[0], z[1], cov)
+
+
+def polar_jacobian(theta: float, range_m: float, bearing: float) -> FloatArray:
+    """d(x, y)/d(range, bearing) of ``(x + r cos(theta + b), y + r sin(theta + b))``."""
+    phi = theta + bearing
+    return np.array(
+        [[math.cos(phi), -range_m * math.sin(phi)], [math.sin(phi), range_m * math.cos(phi)]]
+    )
+
+
+def cv_transition(dt: float) -> FloatArray:
+    """Constant-velocity transition (4, 4) over ``dt``."""
+    F = np.eye(4)
+    F[0, 2] = F[1, 3] = dt
+    return F
+
+
+def white_acceleration_q(q: float, dt: float) -> FloatArray:
+    """``integral_0^dt Phi(s) G q G^T Phi(s)^T ds`` with ``Phi`` the constant-velocity
+    transition and ``G = [0; I]``, by Gauss-Legendre quadrature (exact: the integrand is a
+    polynomial of degree 2 in s)."""
+    nodes, weights = np.polynomial.legendre.leggauss(4)
+    G = np.vstack([np.zeros((2, 2)), np.eye(2)])
+    total = np.zeros((4, 4))
+    for node, weight in zip(nodes, weights, strict=True):
+        s = 0.5 * dt * (node + 1.0)
+        phi = cv_transition(s)
+        total += 0.5 * dt * weight * (phi @ G @ (q * np.eye(2)) @ G.T @ phi.T)
+    return total
+
+
+def rolled(state: ArrayLike, dt: float, a: float) -> FloatArray:
+    """The ball (x, y, vx, vy) after ``dt`` s of rolling at deceleration ``a`` (by hand:
+    speed falls linearly to zero, and the distance is the area under it)."""
+    x = np.asarray(state, dtype=np.float64)
+    speed = math.hypot(x[2], x[3])
+    if speed == 0.0:
+        return x.copy()
+    direction = x[2:] / speed
+    t = min(dt, speed / a) if a > 0 else dt
+    distance = speed * t - 0.5 * a * t * t
+    new_speed = max(speed - a * dt, 0.0)
+    return np.concatenate([x[:2] + distance * direction, new_speed * direction])
+
+
+def rot(angle: float) -> FloatArray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, -s], [s, c]])
+
+
+def frame_change(state: ArrayLike, dx: float, dy: float, dtheta: float) -> FloatArray:
+    """A ball (x, y, vx, vy) in the robot frame, seen after the robot stepped ``(dx, dy)`` in
+    its old frame and turned ``dtheta``: by hand, the point relative to the new origin turned
+    back by the turn."""
+    x = np.asarray(state, dtype=np.float64)
+    back = rot(-dtheta)
+    return np.concatenate([back @ (x[:2] - (dx, dy)), back @ x[2:]])
+
+
+def assert_psd(cov: FloatArray) -> None:
+    """``cov`` is exactly symmetric and positive semidefinite up to rounding."""
+    np.testing.assert_array_equal(cov, cov.T)
+    assert np.linalg.eigvalsh(cov).min() >= -1e-12 * max(1.0, float(np.abs(cov).max()))
+
+
+def run(
+    ball_filter: BallFilter, frames: Sequence[tuple[float, Sequence[BallSighting]]], pose: ArrayLike
+) -> list[BallEstimate]:
+    return [ball_filter.update(t, s, STILL, self_pose(pose)) for t, s in frames]
+
+
+# --- rolling_model ------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("speed", "dt", "a", "new_speed", "distance"),
+    [
+        # v' = v - a dt, d = v dt - a dt² / 2, worked out by hand
+        (1.0, 0.5, 0.11, 0.945, 0.48625),
+        (1.5, 0.1, 0.11, 1.489, 0.14945),
+        (0.3, 2.0, 0.1, 0.1, 0.4),
+        # a dt > v: stops after v / a s, having rolled v² / (2 a); never rolls back
+        (0.05, 1.0, 0.11, 0.0, 0.05**2 / 0.22),
+        (0.2, 10.0, 0.1, 0.0, 0.2),
+        (0.11, 1.0, 0.11, 0.0, 0.055),  # stops exactly at the end of dt
+    ],
+)
+def test_rolling_model_decelerates_along_the_direction_and_stops(
+    speed: float, dt: float, a: float, new_speed: float, distance: float
+) -> None:
+    direction = np.array([-0.6, 0.8])
+    state = np.array([1.0, -2.0, *(speed * direction)])
+    config = BallFilterConfig(deceleration_mps2=a)
+    predicted, F, Q = rolling_model(state, dt, config)
+    np.testing.assert_allclose(predicted[:2], state[:2] + distance * direction, atol=1e-12)
+    np.testing.assert_allclose(predicted[2:], new_speed * direction, atol=1e-12)
+    assert predicted[2:] @ direction >= 0.0  # no reversal
+    # The covariance's F rolls the uncertainty on at constant velocity (friction a known input)
+    expected_F = np.block([[np.eye(2), dt * np.eye(2)], [np.zeros((2, 2)), np.eye(2)]])
+    np.testing.assert_allclose(F, expected_F, atol=1e-12)
+    assert Q.shape == (4, 4)
+
+
+def test_rolling_model_distance_is_the_area_under_the_speed() -> None:
+    """Many small steps of the model add up to one big step (the closed form composes), and
+    the position follows v t - a t² / 2 until the ball stops at v / a."""
+    config = BallFilterConfig(deceleration_mps2=0.11)
+    v0, direction = 1.2, np.array([0.8, 0.6])
+    state = np.array([0.0, 0.0, *(v0 * direction)])
+    t = 0.0
+    for _ in range(150):  # 15 s: the ball stops at 10.9 s
+        state, _, _ = rolling_model(state, 0.1, config)
+        t += 0.1
+        rolling = min(t, v0 / 0.11)
+        expected = v0 * rolling - 0.5 * 0.11 * rolling**2
+        np.testing.assert_allclose(state[:2], expected * direction, atol=1e-9)
+        assert np.hypot(*state[2:]) == pytest.approx(max(v0 - 0.11 * t, 0.0), abs=1e-9)
+    assert np.hypot(*state[:2]) == pytest.approx(v0**2 / (2 * 0.11), abs=1e-9)
+
+
+@pytest.mark.parametrize("dt", [0.0, 0.033, 0.1, 1.0])
+def test_a_ball_at_rest_stays_and_q_is_the_white_acceleration_integral(dt: float) -> None:
+    config = BallFilterConfig(acceleration_psd=0.3)
+    state = np.array([2.0, -1.0, 0.0, 0.0])
+    predicted, F, Q = rolling_model(state, dt, config)
+    np.testing.assert_array_equal(predicted, state)
+    np.testing.assert_allclose(F, cv_transition(dt), atol=1e-15)
+    assert F.shape == Q.shape == (4, 4)
+    np.testing.assert_allclose(Q, white_acceleration_q(0.3, dt), rtol=1e-12, atol=1e-15)
+    np.testing.assert_array_equal(Q, Q.T)
+    # the per-axis closed form: q [[dt³/3, dt²/2], [dt²/2, dt]]
+    assert Q[0, 0] == pytest.approx(0.3 * dt**3 / 3) and Q[0, 1] == 0.0
+    assert Q[0, 2] == pytest.approx(0.3 * dt**2 / 2) and Q[2, 2] == pytest.approx(0.3 * dt)
+
+
+@pytest.mark.parametrize("state", [[0.5, 1.0, 1.5, -0.7], [0.0, 0.0, 0.01, 0.0], [3, 4, 0, 0]])
+def test_without_deceleration_the_model_is_exactly_constant_velocity(state: list[float]) -> None:
+    config = BallFilterConfig(deceleration_mps2=0.0, acceleration_psd=0.05)
+    x = np.asarray(state, dtype=np.float64)
+    for dt in (0.0, 0.1, 2.5, 40.0):
+        predicted, F, Q = rolling_model(x, dt, config)
+        np.testing.assert_allclose(predicted, cv_transition(dt) @ x, rtol=1e-14, atol=1e-14)
+        np.testing.assert_allclose(F, cv_transition(dt), rtol=1e-14, atol=1e-14)
+        np.testing.assert_allclose(Q, white_acceleration_q(0.05, dt), rtol=1e-12, atol=1e-15)
+
+
+# --- moved_frame: the robot's own motion --------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("state", "odometry"),
+    [
+        ([2.0, 0.5, 0.0, 0.0], [0.05, 0.0, 0.0]),
+        ([1.0, -1.5, 0.6, 0.2], [0.03, -0.01, 0.15]),
+        ([-0.5, 2.0, -1.0, 0.4], [0.0, 0.0, -0.3]),
+    ],
+)
+def test_the_robot_motion_moves_the_frame_and_its_noise_is_first_order(
+    state: list[float], odometry: list[float]
+) -> None:
+    config = BallFilterConfig(
+        odometry_translation_std_fraction=0.2,
+        odometry_turn_std_fraction=0.1,
+        odometry_turn_std_floor_rad=0.003,
+    )
+    x = np.asarray(state, dtype=np.float64)
+    dx, dy, dtheta = odometry
+    moved, G, Q = moved_frame(x, np.asarray(odometry, dtype=np.float64), config)
+    np.testing.assert_allclose(moved, frame_change(x, dx, dy, dtheta), atol=1e-14)
+    # G: the Jacobian of the map in the state, by central differences
+    eps = 1e-6
+    numeric = np.column_stack(
+        [
+            (frame_change(x + eps * e, dx, dy, dtheta) - frame_change(x - eps * e, dx, dy, dtheta))
+            / (2 * eps)
+            for e in np.eye(4)
+        ]
+    )
+    np.testing.assert_allclose(G, numeric, atol=1e-8)
+    # Q: the walk's noise, isotropic with std 0.2 |d|, on the position, and the turn's noise
+    # (std 0.1 |dθ| + 0.003) through the map's derivative in dθ
+    d_step = np.column_stack(
+        [
+            (frame_change(x, dx + eps, dy, dtheta) - frame_change(x, dx - eps, dy, dtheta))
+            / (2 * eps),
+            (frame_change(x, dx, dy + eps, dtheta) - frame_change(x, dx, dy - eps, dtheta))
+            / (2 * eps),
+        ]
+    )
+    d_turn = (frame_change(x, dx, dy, dtheta + eps) - frame_change(x, dx, dy, dtheta - eps)) / (
+        2 * eps
+    )
+    walk_var = (0.2 * math.hypot(dx, dy)) ** 2
+    turn_var = (0.1 * abs(dtheta) + 0.003) ** 2
+    expected = walk_var * d_step @ d_step.T + turn_var * np.outer(d_turn, d_turn)
+    np.testing.assert_allclose(Q, expected, atol=1e-10)
+    assert_psd(0.5 * (Q + Q.T))
+
+
+# --- BallFilter: start and one Kalman step ------------------------------------------------------
+
+EXACT_STEP = BallFilterConfig(odometry_turn_std_floor_rad=0.0)  # no odometry noise standing still
+
+
+def test_the_ball_is_unknown_before_the_first_sighting() -> None:
+    ball_filter = BallFilter()
+    estimates = [
+        ball_filter.estimate(self_pose([1, 2, 3])),
+        *run(ball_filter, [(0.0, []), (0.5, [])], [1, 2, 3]),
+    ]
+    for estimate in estimates:
+        assert not estimate.known
+        assert estimate.last_seen_s == -math.inf
+        np.testing.assert_array_equal(estimate.state, np.zeros(4))
+        np.testing.assert_array_equal(estimate.relative, np.zeros(4))
+
+
+@pytest.mark.parametrize(
+    "pose_cov",
+    [EXACT, np.array([[0.01, 0.002, 0.003], [0.002, 0.02, -0.004], [0.003, -0.004, 0.01]])],
+)
+def test_the_first_sighting_starts_the_filter_at_rest_at_the_sighting(pose_cov: FloatArray) -> None:
+    config = BallFilterConfig(initial_velocity_std_mps=0.7)
+    pose = np.array([1.0, -0.5, 0.4])
+    r, b = 2.0, 0.3
+    cov = np.array([[0.05**2, 0.0003], [0.0003, 0.02**2]])
+    ball_filter = BallFilter(config)
+    estimate = ball_filter.update(3.0, [sighting(r, b, cov)], STILL, self_pose(pose, pose_cov))
+    assert estimate.known and estimate.last_seen_s == 3.0
+    expected_z = [1.0 + r * math.cos(0.7), -0.5 + r * math.sin(0.7)]
+    np.testing.assert_allclose(estimate.state, [*expected_z, 0.0, 0.0], atol=1e-14)
+    np.testing.assert_allclose(
+        estimate.relative, [r * math.cos(b), r * math.sin(b), 0.0, 0.0], atol=1e-14
+    )
+    J = polar_jacobian(0.4, r, b)
+    # the pose moves the point by dx, dy and by r (-sin, cos) per radian of heading
+    J_pose = np.array([[1.0, 0.0, -r * math.sin(0.7)], [0.0, 1.0, r * math.cos(0.7)]])
+    expected_R = J @ cov @ J.T + J_pose @ pose_cov @ J_pose.T
+    np.testing.assert_allclose(estimate.cov[:2, :2], expected_R, rtol=1e-12, atol=1e-16)
+    np.testing.assert_allclose(estimate.cov[:2, 2:], np.zeros((2, 2)), atol=1e-16)
+    np.testing.assert_allclose(estimate.cov[2:, 2:], 0.49 * np.eye(2), rtol=1e-14, atol=1e-16)
+    J_rel = polar_jacobian(0.0, r, b)
+    np.testing.assert_allclose(estimate.relative_cov[:2, :2], J_rel @ cov @ J_rel.T, rtol=1e-12)
+    assert_psd(estimate.cov)
+    assert_psd(estimate.relative_cov)
+
+
+def test_the_second_sighting_of_a_resting_ball_is_a_kalman_step() -> None:
+    config = BallFilterConfig(
+        acceleration_psd=0.2, initial_velocity_std_mps=0.4, odometry_turn_std_floor_rad=0.0
+    )
+    pose = np.array([-1.0, 0.5, -0.8])
+    ball_filter = BallFilter(config)
+    r0, b0, r1, b1 = 1.8, 0.25, 1.84, 0.27
+    cov0, cov1 = np.diag([0.03**2, 0.02**2]), np.diag([0.05**2, 0.01**2])
+    ball_filter.update(1.0, [sighting(r0, b0, cov0)], STILL, self_pose(pose))
+    dt = 0.25
+    estimate = ball_filter.update(1.0 + dt, [sighting(r1, b1, cov1)], STILL, self_pose(pose))
+
+    def point(r: float, b: float) -> FloatArray:  # robot frame
+        return np.array([r * math.cos(b), r * math.sin(b)])
+
+    J0, J1 = polar_jacobian(0.0, r0, b0), polar_jacobian(0.0, r1, b1)
+    x0 = np.concatenate([point(r0, b0), [0.0, 0.0]])
+    P0 = np.zeros((4, 4))
+    P0[:2, :2] = J0 @ cov0 @ J0.T
+    P0[2:, 2:] = 0.16 * np.eye(2)
+    F = cv_transition(dt)  # at rest: no rolling
+    x_pred = F @ x0
+    P_pred = F @ P0 @ F.T + white_acceleration_q(0.2, dt)
+    H = np.hstack([np.eye(2), np.zeros((2, 2))])
+    R1 = J1 @ cov1 @ J1.T
+    S = H @ P_pred @ H.T + R1
+    K = P_pred @ H.T @ np.linalg.inv(S)
+    innovation = point(r1, b1) - H @ x_pred
+    assert innovation @ np.linalg.solve(S, innovation) < chi2.ppf(0.99, 2)  # inside the gate
+    x = x_pred + K @ innovation
+    P = (np.eye(4) - K @ H) @ P_pred
+    np.testing.assert_allclose(estimate.relative, x, rtol=1e-10, atol=1e-13)
+    np.testing.assert_allclose(estimate.relative_cov, P, rtol=1e-9, atol=1e-14)
+    # on the field: turned by the heading and moved by the position (exact pose)
+    T = np.zeros((4, 4))
+    T[:2, :2] = T[2:, 2:] = rot(pose[2])
+    np.testing.assert_allclose(estimate.state, [*pose[:2], 0, 0] + T @ x, rtol=1e-10, atol=1e-13)
+    np.testing.assert_allclose(estimate.cov, T @ P @ T.T, rtol=1e-9, atol=1e-14)
+    assert estimate.last_seen_s == 1.25 and estimate.known
+    assert_psd(estimate.cov)
+
+
+def test_a_frame_without_sightings_only_predicts() -> None:
+    """Standing still, the odometry's turn floor (std 0.002 rad) still turns the frame: a
+    resting ball at p gains ``0.002² b bᵀ`` with ``b = (p_y, -p_x)``, the derivative of
+    ``R(-dθ) p`` at dθ = 0."""
+    config = BallFilterConfig(acceleration_psd=0.1, odometry_turn_std_floor_rad=0.002)
+    ball_filter = BallFilter(config)
+    ball_filter.update(0.0, [sighting(2.0, 0.5)], STILL, self_pose([0, 0, 0]))
+    P0 = ball_filter.estimate(self_pose([0, 0, 0])).relative_cov
+    estimate = ball_filter.update(0.5, [], STILL, self_pose([0, 0, 0]))
+    p = 2.0 * np.array([math.cos(0.5), math.sin(0.5)])
+    np.testing.assert_allclose(estimate.relative, [*p, 0.0, 0.0], atol=1e-15)
+    F = cv_transition(0.5)
+    b = np.array([p[1], -p[0], 0.0, 0.0])
+    expected = F @ P0 @ F.T + white_acceleration_q(0.1, 0.5) + 0.002**2 * np.outer(b, b)
+    np.testing.assert_allclose(estimate.relative_cov, expected, rtol=1e-12, atol=1e-16)
+    assert estimate.last_seen_s == 0.0
+
+
+def test_of_several_sightings_the_one_nearest_the_prediction_is_fused() -> None:
+    """The best-scored sighting comes first; when it is a false one far off, the nearer one
+    is fused all the same."""
+    pose = [0.0, 0.0, 0.0]
+    ball_filter = BallFilter()
+    ball_filter.update(0.0, [observe(pose, [2.0, 0.5])], STILL, self_pose(pose))
+    far, near = observe(pose, [0.5, -2.0]), observe(pose, [2.02, 0.5])
+    estimate = ball_filter.update(0.1, [far, near], STILL, self_pose(pose))
+    assert estimate.last_seen_s == 0.1
+    assert np.linalg.norm(estimate.state[:2] - [2.0, 0.5]) < 0.03
+    # alone, the far one is not fused
+    estimate = ball_filter.update(0.2, [observe(pose, [0.5, -2.0])], STILL, self_pose(pose))
+    assert estimate.last_seen_s == 0.1
+    assert np.linalg.norm(estimate.state[:2] - [2.0, 0.5]) < 0.03
+
+
+# --- BallFilter: our own kick ---------------------------------------------------------------------
+
+
+def test_our_own_kick_sets_the_velocity_of_a_ball_within_reach() -> None:
+    config = EXACT_STEP
+    kick = np.array([2.0, 0.5])
+    ball_filter = BallFilter(config)
+    ball_filter.update(0.0, [sighting(0.3, 0.2)], STILL, self_pose([0, 0, 0]))
+    P0 = ball_filter.estimate(self_pose([0, 0, 0])).relative_cov
+    estimate = ball_filter.update(DT, [], STILL, self_pose([0, 0, 0]), kick_velocity=kick)
+    rolling = 0.71 * kick  # the default own_kick_rolling_fraction
+    start = np.array([0.3 * math.cos(0.2), 0.3 * math.sin(0.2), *rolling])
+    np.testing.assert_allclose(estimate.relative, rolled(start, DT, 0.11), atol=1e-12)
+    # the velocity forgets its correlations and takes std 0.3; then one step of rolling, the
+    # covariance at constant velocity
+    F = np.block([[np.eye(2), DT * np.eye(2)], [np.zeros((2, 2)), np.eye(2)]])
+    P = np.zeros((4, 4))
+    P[:2, :2] = P0[:2, :2]
+    P[2:, 2:] = 0.3**2 * np.eye(2)
+    expected = F @ P @ F.T + white_acceleration_q(config.acceleration_psd, DT)
+    np.testing.assert_allclose(estimate.relative_cov, expected, rtol=1e-12, atol=1e-16)
+    # a ball out of reach (0.5 m > 0.45 m) is not kicked; nor by a zero kick
+    for distance, kicked_by in ((0.5, kick), (0.3, np.zeros(2)), (0.3, None)):
+        ball_filter = BallFilter(config)
+        ball_filter.update(0.0, [sighting(distance, 0.0)], STILL, self_pose([0, 0, 0]))
+        estimate = ball_filter.update(DT, [], STILL, self_pose([0, 0, 0]), kicked_by)
+        np.testing.assert_allclose(estimate.relative, [distance, 0, 0, 0], atol=1e-15)
+
+
+# --- BallFilter: simulated balls ----------------------------------------------------------------
+
+
+def test_a_rolling_ball_seen_from_a_walking_robot_is_tracked_consistently() -> None:
+    """Balls rolling with the model's deceleration, perturbed by the model's own white
+    acceleration, seen with the sightings' stated noise by a robot that walks and turns, its
+    odometry off the true motion by the model's own odometry noise: after 3 s each run's final
+    NEES (robot frame) is chi2(4), so their sum over the runs lies in the chi2(4 n) band; the
+    field estimate with the true pose is the truth on the field, and the position error is well
+    below one sighting's."""
+    config = BallFilterConfig()
+    n_runs, n_frames = 100, 30
+    L = np.linalg.cholesky(white_acceleration_q(config.acceleration_psd, DT))
+    reported = np.array([0.02, 0.005, 0.03])  # per frame: 0.2 m/s forward, 0.3 rad/s left
+    walk_std = config.odometry_translation_std_fraction * math.hypot(*reported[:2])
+    turn_std = config.odometry_turn_std_fraction * reported[2] + config.odometry_turn_std_floor_rad
+    nees, position_errors, single = [], [], []
+    for seed in range(n_runs):
+        rng = np.random.default_rng(seed)
+        truth = np.array([1.5, -0.5, 0.8, 0.5])  # field frame
+        pose = np.array([0.5, -1.0, 0.2])  # true pose
+        ball_filter = BallFilter(config)
+        for k in range(n_frames):
+            odometry = STILL
+            if k > 0:
+                truth = rolled(truth, DT, config.deceleration_mps2) + L @ rng.standard_normal(4)
+                step = reported[:2] + walk_std * rng.standard_normal(2)
+                turn = reported[2] + turn_std * rng.standard_normal()
+                pose = np.array([*(pose[:2] + rot(pose[2]) @ step), pose[2] + turn])
+                odometry = reported
+            estimate = ball_filter.update(
+                k * DT, [observe(pose, truth, rng)], odometry, self_pose(pose)
+            )
+            assert_psd(estimate.relative_cov)
+        back = rot(-pose[2])
+        relative = np.concatenate([back @ (truth[:2] - pose[:2]), back @ truth[2:]])
+        error = estimate.relative - relative
+        nees.append(float(error @ np.linalg.solve(estimate.relative_cov, error)))
+        field_error = estimate.state - truth
+        np.testing.assert_allclose(field_error[:2], rot(pose[2]) @ error[:2], atol=1e-12)
+        position_errors.append(float(np.linalg.norm(error[:2])))
+        r = math.dist(pose[:2], truth[:2])
+        single.append(math.sqrt(COV[0, 0] + r**2 * COV[1, 1]))  # one sighting's RMS error
+        assert estimate.known and estimate.last_seen_s == pytest.approx((n_frames - 1) * DT)
+    low, high = chi2.ppf([0.0005, 0.9995], 4 * n_runs)
+    assert low <= sum(nees) <= high, np.mean(nees)
+    rms = math.sqrt(np.mean(np.square(position_errors)))
+    assert rms < 0.8 * float(np.mean(single)), (rms, np.mean(single))
+
+
+KICK = 1.5 * np.array([0.6, 0.8])  # m/s
+KICKED_AT = 10  # the frame the kick is first seen in
+
+
+@functools.lru_cache(maxsize=1)
+def kicked_runs(
+    n_seeds: int = 20, n_frames: int = 35
+) -> list[tuple[list[BallEstimate], FloatArray]]:
+    """Per seed: the estimates of a ball at rest for a second, kicked to 1.5 m/s just after
+    frame ``KICKED_AT - 1`` and rolling on, seen with noise from the origin; and the truths."""
+    config = BallFilterConfig()
+    pose = np.zeros(3)
+    runs = []
+    for seed in range(n_seeds):
+        rng = np.random.default_rng(100 + seed)
+        ball_filter = BallFilter(config)
+        truth = np.array([2.0, -1.0, 0.0, 0.0])
+        estimates, truths = [], []
+        for k in range(n_frames):
+            if k == KICKED_AT:
+                truth[2:] = KICK
+            if k >= KICKED_AT:
+                truth = rolled(truth, DT, config.deceleration_mps2)
+            sightings = [observe(pose, truth, rng)]
+            estimates.append(ball_filter.update(k * DT, sightings, STILL, self_pose(pose)))
+            truths.append(truth.copy())
+        runs.append((estimates, np.array(truths)))
+    return runs
+
+
+def test_a_kick_is_followed_without_a_restart() -> None:
+    """The filter is never restarted (a restart puts it at rest: zero velocity with the
+    initial velocity variance), the position stays within 0.2 m, the covariance PSD, and over
+    the runs the velocity converges to the rolling ball's (median error < 0.15 m/s after 2.5 s)."""
+    restarted = BallFilterConfig().initial_velocity_std_mps ** 2 * np.eye(2)
+    final_velocity_errors = []
+    for seed, (estimates, truths) in enumerate(kicked_runs()):
+        for k, (estimate, truth) in enumerate(zip(estimates, truths, strict=True)):
+            assert_psd(estimate.cov)
+            if k > 0:
+                assert not (
+                    np.all(estimate.state[2:] == 0.0)
+                    and np.array_equal(estimate.cov[2:, 2:], restarted)
+                ), (seed, k)
+            if k >= KICKED_AT:
+                assert np.linalg.norm(estimate.state[:2] - truth[:2]) < 0.2, (seed, k)
+        assert estimates[-1].last_seen_s == pytest.approx((len(estimates) - 1) * DT)
+        final_velocity_errors.append(
+            float(np.linalg.norm(estimates[-1].state[2:] - truths[-1, 2:]))
+        )
+    assert float(np.median(final_velocity_errors)) < 0.15, final_velocity_errors
+
+
+def test_a_kick_is_followed_within_four_frames() -> None:
+    """Every post-kick sighting is fused (last_seen_s each frame) and four frames after the
+    kick the speed estimate exceeds 1 m/s with the position within 0.1 m, in every run."""
+    for seed, (estimates, truths) in enumerate(kicked_runs()):
+        for k in range(KICKED_AT, len(estimates)):
+            assert estimates[k].last_seen_s == pytest.approx(k * DT), (seed, k)
+        estimate, truth = estimates[KICKED_AT + 4], truths[KICKED_AT + 4]
+        assert np.hypot(*estimate.state[2:]) > 1.0, (seed, estimate.state)
+        assert np.linalg.norm(estimate.state[:2] - truth[:2]) < 0.1, seed
+
+
+def test_a_kick_from_a_ball_estimated_nearly_at_rest_is_followed_as_from_rest() -> None:
+    """Noise-free sightings of a resting ball, jittered by a centimetre so that the estimated
+    speed is small but not zero, then a 1.5 m/s kick (sightings 0.15, 0.30, 0.45 m along y):
+    every sighting is fused, the estimate follows the jitter-free one (the model has no jump at
+    zero speed: within 0.05 m/s) and the third frame's speed is above 1 m/s."""
+    pose = [0.0, 0.0, 0.0]
+    followed = []
+    for jitter in (0.0, 0.01):
+        ball_filter = BallFilter()
+        points = [[2.0, 0.0], [2.0 + jitter, 0.0], [2.0, jitter / 2], [2.0 - jitter / 2, 0.0]]
+        for k in range(10):
+            ball_filter.update(k * DT, [observe(pose, points[k % 4])], STILL, self_pose(pose))
+        for k, y in enumerate((0.15, 0.30, 0.45), start=10):
+            estimate = ball_filter.update(k * DT, [observe(pose, [2.0, y])], STILL, self_pose(pose))
+            assert estimate.last_seen_s == k * DT, (jitter, k)  # fused
+        assert estimate.state[3] > 1.0, (jitter, estimate.state)
+        followed.append(estimate.state)
+    np.testing.assert_allclose(followed[0][2:], followed[1][2:], atol=0.05)
+
+
+# --- BallFilter: false sightings and the candidate restart -------------------------------------
+
+
+def steady_filter(pose: ArrayLike, ball: ArrayLike) -> tuple[BallFilter, float]:
+    """A filter that saw a resting ``ball`` exactly for five frames; and the last frame's time."""
+    ball_filter = BallFilter(EXACT_STEP)
+    for k in range(5):
+        ball_filter.update(k * DT, [observe(pose, ball)], STILL, self_pose(pose))
+    return ball_filter, 4 * DT
+
+
+def test_a_single_far_off_sighting_is_not_fused() -> None:
+    pose, ball = [0.5, 0.5, 1.0], [1.5, 2.0]
+    ball_filter, t = steady_filter(pose, ball)
+    before = ball_filter.estimate(self_pose(pose))
+    np.testing.assert_allclose(before.state, [*ball, 0.0, 0.0], atol=1e-12)
+    estimate = ball_filter.update(t + DT, [observe(pose, [3.0, 3.5])], STILL, self_pose(pose))
+    # a resting ball's prediction: the same state, the covariance of DT more rolling at rest
+    np.testing.assert_allclose(estimate.state, before.state, atol=1e-12)
+    F = cv_transition(DT)
+    expected = F @ before.relative_cov @ F.T + white_acceleration_q(EXACT_STEP.acceleration_psd, DT)
+    np.testing.assert_allclose(estimate.relative_cov, expected, rtol=1e-12, atol=1e-16)
+    assert estimate.last_seen_s == before.last_seen_s == t
+    assert_psd(estimate.cov)
+
+
+def test_two_agreeing_far_off_sightings_in_a_row_restart_the_filter_there() -> None:
+    pose, ball, moved = [0.5, 0.5, 1.0], [1.5, 2.0], [3.0, 3.5]
+    config = EXACT_STEP
+    ball_filter, t = steady_filter(pose, ball)
+    ball_filter.update(t + DT, [observe(pose, moved)], STILL, self_pose(pose))
+    second = observe(pose, np.add(moved, [0.01, -0.01]))
+    estimate = ball_filter.update(t + 2 * DT, [second], STILL, self_pose(pose))
+    assert estimate.known and estimate.last_seen_s == t + 2 * DT
+    x, y, theta = pose
+    phi = theta + second.bearing_rad
+    z = [x + second.range_m * math.cos(phi), y + second.range_m * math.sin(phi)]
+    np.testing.assert_allclose(estimate.state, [*z, 0.0, 0.0], atol=1e-12)
+    J = polar_jacobian(theta, second.range_m, second.bearing_rad)
+    np.testing.assert_allclose(estimate.cov[:2, :2], J @ COV @ J.T, rtol=1e-12)
+    np.testing.assert_allclose(estimate.cov[:2, 2:], np.zeros((2, 2)), atol=1e-16)
+    np.testing.assert_allclose(
+        estimate.cov[2:, 2:], config.initial_velocity_std_mps**2 * np.eye(2), rtol=1e-14, atol=1e-16
+    )
+    # from there on it follows the moved ball
+    estimate = ball_filter.update(t + 3 * DT, [observe(pose, moved)], STILL, self_pose(pose))
+    assert estimate.last_seen_s == t + 3 * DT
+    assert np.linalg.norm(estimate.state[:2] - moved) < 0.02
+
+
+def test_a_far_off_sighting_between_true_ones_or_disagreeing_ones_restart_nothing() -> None:
+    pose, ball = [0.0, 0.0, 0.0], [2.0, 0.0]
+    ball_filter, t = steady_filter(pose, ball)
+    far_a, far_b = [2.0, 2.0], [0.5, -2.0]
+    frames = [
+        (far_a, False),  # candidate A
+        (ball, True),  # fused: the candidate is forgotten
+        (far_a, False),  # a new candidate, not a restart
+        (far_b, False),  # disagrees with A: now candidate B
+        (ball, True),
+    ]
+    for k, (point, fused) in enumerate(frames, start=1):
+        estimate = ball_filter.update(t + k * DT, [observe(pose, point)], STILL, self_pose(pose))
+        assert (estimate.last_seen_s == t + k * DT) == fused, k
+        assert np.linalg.norm(estimate.state[:2] - ball) < 1e-9, k
+        assert_psd(estimate.cov)
+    # B then B again: a restart at B
+    for k in (6, 7):
+        estimate = ball_filter.update(t + k * DT, [observe(pose, far_b)], STILL, self_pose(pose))
+    np.testing.assert_allclose(estimate.state, [*far_b, 0.0, 0.0], atol=1e-12)
+
+
+# --- BallFilter: time, reset, configuration -----------------------------------------------------
+
+
+def test_time_must_be_finite_and_must_not_go_back_and_odometry_be_three_numbers() -> None:
+    ball_filter = BallFilter()
+    pose = self_pose([0, 0, 0])
+    ball_filter.update(1.0, [sighting(2.0, 0.1)], STILL, pose)
+    before = ball_filter.estimate(pose)
+    for bad in (0.99, math.nan, math.inf, -math.inf):
+        with pytest.raises(ValueError, match="time_s"):
+            ball_filter.update(bad, [sighting(2.0, 0.1)], STILL, pose)
+    for odometry in (np.zeros(2), np.array([0.0, math.nan, 0.0])):
+        with pytest.raises(ValueError, match="odometry"):
+            ball_filter.update(1.1, [sighting(2.0, 0.1)], odometry, pose)
+    after = ball_filter.estimate(pose)
+    np.testing.assert_array_equal(after.relative, before.relative)
+    np.testing.assert_array_equal(after.relative_cov, before.relative_cov)
+    ball_filter.update(1.0, [], STILL, pose)  # the same time again is fine
+    with pytest.raises(ValueError, match="time_s"):
+        BallFilter().update(math.nan, [], STILL, pose)
+
+
+def test_reset_forgets_the_ball_the_time_and_the_candidate() -> None:
+    pose = [0.0, 0.0, 0.0]
+    ball_filter, t = steady_filter(pose, [2.0, 0.0])
+    ball_filter.update(t + DT, [observe(pose, [0.5, 2.0])], STILL, self_pose(pose))  # candidate
+    ball_filter.reset()
+    estimate = ball_filter.estimate(self_pose(pose))
+    assert not estimate.known and estimate.last_seen_s == -math.inf
+    np.testing.assert_array_equal(estimate.state, np.zeros(4))
+    # an earlier time is fine after a reset; the first sighting starts the filter anew
+    estimate = ball_filter.update(0.0, [observe(pose, [2.0, 0.0])], STILL, self_pose(pose))
+    assert estimate.known and estimate.last_seen_s == 0.0
+    # the old candidate is gone: one far sighting there is not a restart
+    estimate = ball_filter.update(DT, [observe(pose, [0.5, 2.0])], STILL, self_pose(pose))
+    assert estimate.last_seen_s == 0.0
+    np.testing.assert_allclose(estimate.state[:2], [2.0, 0.0], atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("deceleration_mps2", -0.1),
+        ("deceleration_mps2", math.nan),
+        ("acceleration_psd", 0.0),
+        ("initial_velocity_std_mps", 0.0),
+        ("kick_velocity_std_mps", -1.0),
+        ("gate_probability", 1.0),
+        ("gate_probability", 0.0),
+        ("odometry_translation_std_fraction", -0.1),
+        ("odometry_turn_std_floor_rad", math.inf),
+        ("own_kick_reach_m", 0.0),
+        ("own_kick_rolling_fraction", 0.0),
+        ("own_kick_rolling_fraction", 1.1),
+        ("own_kick_std_mps", 0.0),
+    ],
+)
+def test_config_rejects_bad_values(field: str, value: float) -> None:
+    with pytest.raises(ValueError, match=f"BallFilterConfig.{field}"):
+        BallFilterConfig(**{field: value})
+
+
+def test_config_gate_is_the_chi_square_quantile() -> None:
+    assert BallFilterConfig(gate_probability=0.99).gate_threshold == pytest.approx(
+        -2 * math.log(0.01)
+    )
+    assert BallFilterConfig(deceleration_mps2=0.0).deceleration_mps2 == 0.0
+    assert BallFilterConfig(own_kick_rolling_fraction=1.0).own_kick_rolling_fraction == 1.0
