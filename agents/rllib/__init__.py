@@ -1,0 +1,7 @@
+"""Ray RLlib training of the SPL envs (the ``ray`` extra: ``pip install -e ".[ray]"``).
+
+:mod:`agents.rllib.envs` builds the envs as RLlib wants them (registered env creators, flat
+observations); :mod:`agents.rllib.training` connects to Ray (this machine, or a cluster by its
+address) and holds the PPO config and the training loop that ``examples/rllib_striker.py`` and
+``examples/rllib_team.py`` share.
+"""

@@ -1,0 +1,132 @@
+"""What the RLlib examples share: connecting to Ray, the PPO config, the team policies, the loop.
+
+Ray runs on this machine unless an address is given (``--address`` or ``RAY_ADDRESS``): then the
+same script drives a cluster started with ``ray start --head`` (every node needs this package
+installed, as the env runners build the envs where they run).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from collections.abc import Hashable
+from pathlib import Path
+from typing import Any, Literal
+
+import ray
+from ray.rllib.algorithms.algorithm import Algorithm
+from ray.rllib.algorithms.ppo import PPOConfig
+from ray.rllib.core.rl_module.multi_rl_module import MultiRLModuleSpec
+from ray.rllib.core.rl_module.rl_module import RLModuleSpec
+from ray.rllib.utils.metrics import (
+    ENV_RUNNER_RESULTS,
+    EPISODE_MODULE_RETURN_MEAN,
+    EPISODE_RETURN_MEAN,
+    NUM_ENV_STEPS_SAMPLED,
+    NUM_EPISODES,
+)
+
+from agents.rllib.envs import register_envs
+
+TEAMS: tuple[str, ...] = ("blue", "red")
+SHARED_POLICY = "shared"
+PolicyMode = Literal["team", "shared"]
+
+
+def init_ray(address: str | None, env_runners: int) -> None:
+    """Connect to the Ray cluster at ``address`` (or ``RAY_ADDRESS``; ``"auto"``: the one that
+    ``ray start`` runs on this machine), else start a new Ray here; then register the envs.
+
+    A local Ray gets at least ``env_runners + 1`` logical CPUs (one per env runner, one for the
+    driver and its learner), so that the runners start on a machine with fewer cores, which they
+    then share. Ray already up (e.g. in the tests) is used as it is.
+    """
+    if not ray.is_initialized():
+        address = address or os.environ.get("RAY_ADDRESS")
+        if address is None:
+            cpus = max(os.cpu_count() or 1, env_runners + 1)
+            ray.init(address="local", num_cpus=cpus, include_dashboard=False)
+        else:
+            ray.init(address=address)
+    register_envs()
+
+
+def ppo_config(
+    env: str,
+    env_config: dict[str, Any],
+    env_runners: int,
+    batch: int,
+    minibatch: int,
+    epochs: int,
+    lr: float,
+    seed: int,
+) -> PPOConfig:
+    """PPO on the new API stack: ``env_runners`` remote samplers (each one env), the learner in the
+    driver process; ``batch`` env steps per training iteration (in the team env each one is a
+    step of every robot), SGD on ``minibatch``-step minibatches for ``epochs`` passes at learning
+    rate ``lr``. The default model, an MLP (256, 256) with tanh, sees the flattened observation.
+    """
+    return (
+        PPOConfig()
+        .environment(env, env_config=env_config)
+        .env_runners(num_env_runners=env_runners)
+        .learners(num_learners=0)
+        .training(
+            train_batch_size_per_learner=batch, minibatch_size=minibatch, num_epochs=epochs, lr=lr
+        )
+        .debugging(seed=seed)
+    )
+
+
+def team_policy(agent_id: Hashable, *args: Any, **kwargs: Any) -> str:
+    """Policy mapping for one policy per team: ``"blue_0"`` -> ``"blue"``."""
+    return str(agent_id).split("_")[0]
+
+
+def shared_policy(agent_id: Hashable, *args: Any, **kwargs: Any) -> str:
+    """Policy mapping for one policy that every robot of both teams runs."""
+    return SHARED_POLICY
+
+
+def with_team_policies(config: PPOConfig, mode: PolicyMode) -> PPOConfig:
+    """``config`` made multi-agent: a policy per team in :data:`TEAMS` (``"team"``: each team
+    trains its own, against the other one as it learns) or one :data:`SHARED_POLICY` (the
+    ``"shared"`` mode: both teams' experience trains it, self-play)."""
+    policies = set(TEAMS) if mode == "team" else {SHARED_POLICY}
+    mapping = team_policy if mode == "team" else shared_policy
+    specs = {policy: RLModuleSpec() for policy in sorted(policies)}
+    return config.multi_agent(policies=policies, policy_mapping_fn=mapping).rl_module(
+        rl_module_spec=MultiRLModuleSpec(rl_module_specs=specs)
+    )
+
+
+def summary(iteration: int, result: dict[str, Any], seconds: float) -> str:
+    """One line on a training iteration: env steps sampled, episodes finished, the mean episode
+    return over the recent episodes (summed over agents in the team env; per policy too where
+    there are several) and the wall time."""
+    runners = result.get(ENV_RUNNER_RESULTS, {})
+    line = (
+        f"iteration {iteration}: {int(runners.get(NUM_ENV_STEPS_SAMPLED, 0))} env steps, "
+        f"{int(runners.get(NUM_EPISODES, 0))} episodes, "
+        f"return {float(runners.get(EPISODE_RETURN_MEAN, math.nan)):.2f}"
+    )
+    per_module = runners.get(EPISODE_MODULE_RETURN_MEAN, {})
+    if len(per_module) > 1:
+        line += " (" + ", ".join(f"{m} {float(r):.2f}" for m, r in sorted(per_module.items())) + ")"
+    return line + f", {seconds:.1f} s"
+
+
+def train(algo: Algorithm, iterations: int, out: Path | None) -> list[dict[str, Any]]:
+    """Run ``iterations`` training iterations, printing :func:`summary` lines; save a checkpoint
+    to ``out`` (``Algorithm.from_checkpoint`` restores it) when given. Returns the results."""
+    results = []
+    for iteration in range(1, iterations + 1):
+        start = time.perf_counter()
+        result = algo.train()
+        print(summary(iteration, result, time.perf_counter() - start), flush=True)
+        results.append(result)
+    if out is not None:
+        algo.save_to_path(out.resolve())
+        print(f"checkpoint: {out}")
+    return results
