@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from perception.pipeline import PipelineConfig
+from perception.tracking.robot_tracker import RobotTrackerConfig
 from spl_env.config import SPL_ALIASES, EnvConfig
 from spl_env.envs.core import SplEnv
 from spl_env.tasks.goalie import GoalieTask, GoalieTaskConfig
@@ -58,10 +59,15 @@ _PERCEPTION_DOC = """
 @dataclass(frozen=True, kw_only=True)
 class SoccerConfig(EnvConfig):
     """:class:`spl_env.config.EnvConfig` whose ball is seen by both cameras (the top camera
-    cannot see a ball nearer than about 0.35 m: the feet, where it is kicked)."""
+    cannot see a ball nearer than about 0.35 m: the feet, where it is kicked) and whose robot
+    tracks outlive 5 s unseen (the head follows the ball: a goalie seen during the run-up is
+    still known at the kick)."""
 
     perception: PipelineConfig = field(
-        default_factory=lambda: PipelineConfig(ball_sightings="cnn_both_cameras")
+        default_factory=lambda: PipelineConfig(
+            ball_sightings="cnn_both_cameras",
+            robot_tracker=RobotTrackerConfig(drop_after_s=5.0),
+        )
     )
 
 

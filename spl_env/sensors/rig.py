@@ -93,7 +93,9 @@ class NaoRig:
         self.odometry = WalkOdometry(config.odometry)
         self.sonar = Sonar(config.sonar) if config.sonar is not None else None
         self.laser = Laser(config.laser) if config.laser is not None else None
-        self.emulators = dict(emulators or {})
+        # by name: they draw from one generator in turn, so their order must not be a set's
+        # (string hashes change between processes)
+        self.emulators = dict(sorted((emulators or {}).items()))
         self.lighting = EpisodeLighting.default()
 
     def reset(self, rng: np.random.Generator) -> None:

@@ -177,7 +177,7 @@ def test_missing_image_raises_naming_it() -> None:
         pipeline.step(SensorFrame(time_s=0.1, camera_state=CAMERA_STATE))
 
 
-@pytest.mark.parametrize("name", ["ball", "self_pos", ""])
+@pytest.mark.parametrize("name", ["goal", "self_pos", ""])
 def test_unknown_representation_raises(name: str) -> None:
     with pytest.raises(ValueError, match="unknown representation"):
         PerceptionPipeline(PipelineConfig(), context(), outputs=[name])

@@ -23,6 +23,7 @@ from spl_env.observations.base import EncoderInput
 from spl_env.observations.poles import RANGE_SCALE_M
 from spl_env.observations.self_pose import SelfPoseEncoder
 from spl_env.robots.nao import NaoRobot, RobotConfig, kick_intent, walk_target
+from spl_env.sensors.rig import NaoRig
 from spl_env.tasks.soccer import ball_in_goal, ball_out
 from spl_env.tasks.soccer_skills import SkillConfig, approach_and_kick, guard_goal
 
@@ -296,3 +297,25 @@ def test_the_players_read_back_what_the_encoders_wrote() -> None:
     assert unsquash(0.5, RANGE_SCALE_M) == pytest.approx(RANGE_SCALE_M)
     unseen: dict[str, np.ndarray] = {**obs, "ball_since_seen": np.ones(1, dtype=np.float32)}
     assert believed_ball(unseen, pose) is None
+
+
+def test_emulators_draw_in_an_order_no_process_changes() -> None:
+    """The rig runs its emulators in name order, whatever order it was handed them in (a set's
+    order changes with the process's string hashes): the same seed gives the same ball and
+    robot sightings either way."""
+    runs = []
+    for reverse in (False, True):
+        env = gym.make("SPL/Striker-v0", **FAST)
+        core = core_of(env)
+        given = dict(reversed(list(core.rig.emulators.items())) if reverse else core.rig.emulators)
+        core.rig = NaoRig(core.rig.config, core.rig.robot, given)
+        assert list(core.rig.emulators) == sorted(given)
+        obs, _ = env.reset(seed=3)
+        steps = [obs]
+        for _ in range(5):
+            steps.append(env.step(np.zeros(5, dtype=np.float32))[0])
+        runs.append(steps)
+        env.close()
+    for a, b in zip(*runs, strict=True):
+        for key in a:
+            np.testing.assert_array_equal(a[key], b[key])
