@@ -12,7 +12,12 @@ pose than its twin through the centre spot (the field's symmetry), and how many 
 recogniser's observations of the end the camera faces were right and wrong (against the true
 camera heading) after the walk-on. The same episodes without
 natural landmarks (``field_end="none"``) beside it: the field features alone relocalise on the
-truth or its twin.
+truth or its twin. Seeds 0-4 are for tuning; 100 and up are held out.
+
+Per kidnap the JSON also holds what the walk-on stored (views facing each goal) and the
+interval's trace: each field-end observation (time, end, right?, net votes) and each
+relocalisation or half turn of the pose filter (time, on the correct end after it?).
+``--variant`` runs one localisation only.
 
 Seeds ``--seed`` .. ``--seed + --episodes - 1`` (100-101 by default: held out), ``--kidnaps``
 per episode (the seed: 10 kidnaps).
@@ -20,6 +25,7 @@ per episode (the seed: 10 kidnaps).
     python benchmarks/kidnaps.py                  # ~15 min on 2 cores
     python benchmarks/kidnaps.py --episodes 1 --kidnaps 3
     python benchmarks/kidnaps.py --seed 0 --set perception.natural_landmarks.walk_on_s=30
+    python benchmarks/kidnaps.py --seed 0 --episodes 5 --variant "natural landmarks"
 
 Writes ``kidnaps.json`` and ``.md`` to ``--out`` (``benchmarks/results``).
 """
@@ -40,7 +46,8 @@ import torch
 import spl_env  # noqa: F401  (registers the env ids)
 from agents.evaluate import load_policy
 from perception.landmarks.field_end import AWAY, HOME
-from perception.representations import FIELD_END
+from perception.providers.field import FieldFeaturePose
+from perception.representations import FIELD_END, SELF_POSE
 from spl_env.envs.core import SplEnv
 
 RESULTS = Path("benchmarks/results")
@@ -48,7 +55,8 @@ VARIANTS = {"natural landmarks": "bag_of_words", "field features alone": "none"}
 
 
 def episode(field_end: str, seed: int, args: argparse.Namespace) -> list[dict[str, Any]]:
-    """One episode's kidnaps: per kidnap the position error (m) and whether the end is right."""
+    """One episode's kidnaps: per kidnap the position error (m), whether the end is right, and
+    the interval's trace (:func:`_trace_step`)."""
     steps_per_s = 10  # control steps of 0.1 s
     total_s = args.walk_on + args.kidnaps * args.interval
     env = gym.make(
@@ -66,6 +74,9 @@ def episode(field_end: str, seed: int, args: argparse.Namespace) -> list[dict[st
     core = env.unwrapped
     if not isinstance(core, SplEnv):
         raise TypeError(f"kidnaps need an SplEnv, got {type(core).__name__}")
+    pose_provider = core.pipeline.provider(SELF_POSE)
+    if not isinstance(pose_provider, FieldFeaturePose):
+        raise TypeError(f"kidnaps need the field-feature pose, got {type(pose_provider).__name__}")
     policy = load_policy("scan", env.get_wrapper_attr("config"))
     rng = np.random.default_rng([seed, 7])  # the kidnaps' own draws
     obs, info = env.reset(seed=seed)
@@ -75,14 +86,15 @@ def episode(field_end: str, seed: int, args: argparse.Namespace) -> list[dict[st
     }
     end_steps = {s + int(args.interval * steps_per_s) for s in kidnap_steps}
     seen = {"right": 0, "wrong": 0}  # field-end observations against the true facing
+    trace: list[list[Any]] = []  # since the last kidnap (_trace_step)
+    counts = (0, 0)  # the pose provider's relocalisations and half turns so far
+    database: dict[str, int] = {}
     for step in range(1, int(total_s * steps_per_s) + 1):
         action, _ = policy.predict(obs, deterministic=True)
         obs, _, _, _, info = env.step(action)
-        observation = getattr(core.perception_output.get(FIELD_END), "observation", 0)
-        if observation:
-            camera = info["ground_truth"]["robot_pose"][2] + info["ground_truth"]["head"][0]
-            facing = AWAY if math.cos(camera) > 0 else HOME
-            seen["right" if observation == facing else "wrong"] += 1
+        if step == int(args.walk_on * steps_per_s):
+            database = _database_labels(core)
+        counts = _trace_step(core, pose_provider, info, seen, trace, counts, step / steps_per_s)
         if step in end_steps:
             truth = info["ground_truth"]["robot_pose"]
             belief = info["perception"]["pose"]
@@ -94,14 +106,59 @@ def episode(field_end: str, seed: int, args: argparse.Namespace) -> list[dict[st
                     "twin_error_m": twin,
                     "correct_end": bool(error < twin),
                     "end_observations": dict(seen),  # since the last kidnap
+                    "database": database,
+                    "trace": trace,
                 }
             )
             seen = {"right": 0, "wrong": 0}
+            trace = []
         if step in kidnap_steps:
             others = core.robots[1:]
             core.robots[0].place(core.placement.free_pose(rng, others))
     env.close()
     return results
+
+
+def _database_labels(core: SplEnv) -> dict[str, int]:
+    """How many walk-on images the recogniser stored facing each goal (empty without one)."""
+    provider = core.pipeline.provider(FIELD_END)
+    recogniser = getattr(provider, "_recogniser", None)
+    if recogniser is None:
+        return {}
+    labels = [recogniser.database.label(i) for i in range(len(recogniser.database))]
+    return {"away": labels.count(AWAY), "home": labels.count(HOME)}
+
+
+def _trace_step(
+    core: SplEnv,
+    pose_provider: FieldFeaturePose,
+    info: dict[str, Any],
+    seen: dict[str, int],
+    trace: list[list[Any]],
+    counts: tuple[int, int],
+    time_s: float,
+) -> tuple[int, int]:
+    """Count this step's field-end observation in ``seen`` (against the true camera heading)
+    and append to ``trace`` ``[time (s), event, right]``: event ``"obs+1"``/``"obs-1"`` (an
+    away / home observation; right: it is the end the camera faces, with its net votes),
+    ``"reloc"`` or ``"turn"`` (the pose provider relocalised or turned through the centre
+    spot; right: the pose is now on the correct end). Returns the provider's counts."""
+    belief = core.perception_output.get(FIELD_END)
+    observation = getattr(belief, "observation", 0)
+    truth = info["ground_truth"]["robot_pose"]
+    if observation:
+        camera = truth[2] + info["ground_truth"]["head"][0]
+        facing = AWAY if math.cos(camera) > 0 else HOME
+        right = observation == facing
+        seen["right" if right else "wrong"] += 1
+        trace.append([round(time_s, 1), f"obs{observation:+d}", right, getattr(belief, "votes", 0)])
+    now = (pose_provider.relocalisations, pose_provider.half_turns)
+    for event, before, after in zip(("reloc", "turn"), counts, now, strict=True):
+        if after != before:
+            pose = pose_provider.filter.pose
+            correct = np.hypot(*(pose[:2] - truth[:2])) < np.hypot(*(pose[:2] + truth[:2]))
+            trace.append([round(time_s, 1), event, bool(correct)])
+    return now
 
 
 def main() -> None:
@@ -112,6 +169,12 @@ def main() -> None:
     parser.add_argument("--walk-on", type=float, default=45.0, help="walk-on (s)")
     parser.add_argument("--interval", type=float, default=20.0, help="kidnap to kidnap (s)")
     parser.add_argument("--out", type=Path, default=RESULTS)
+    parser.add_argument(
+        "--variant",
+        choices=list(VARIANTS),
+        action="append",
+        help="run only these localisation variants (default: all)",
+    )
     parser.add_argument(
         "--set",
         type=lambda item: dict([(item.split("=", 1)[0], json.loads(item.split("=", 1)[1]))]),
@@ -126,6 +189,8 @@ def main() -> None:
     t0 = time.perf_counter()
     rows: dict[str, Any] = {}
     for name, field_end in VARIANTS.items():
+        if args.variant and name not in args.variant:
+            continue
         kidnaps = []
         for k in range(args.episodes):
             result = episode(field_end, args.seed + k, args)
@@ -144,6 +209,8 @@ def main() -> None:
             if correct
             else math.nan,
             "median_error_m": float(np.median([r["error_m"] for r in kidnaps])),
+            "silent_intervals": sum(1 for r in kidnaps if not any(r["end_observations"].values())),
+            "stored": [kidnaps[k * args.kidnaps]["database"] for k in range(args.episodes)],
             "all": kidnaps,
         }
     report = {
@@ -161,12 +228,16 @@ def main() -> None:
         f"seeds {args.seed}-{args.seed + args.episodes - 1} (seed 004 Table 4)",
         "",
         "| localisation | correct end | mean error on the correct end (m) | median error (m) "
-        "| field-end observations right / wrong |",
-        "|---|---|---|---|---|",
+        "| field-end observations right / wrong | intervals without one "
+        "| walk-on views stored (away + home, per episode) |",
+        "|---|---|---|---|---|---|---|",
         *(
             f"| {name} | {r['correct_end']} of {r['kidnaps']} | "
             f"{r['mean_error_correct_end_m']:.3f} | {r['median_error_m']:.3f} | "
-            f"{r['end_observations']['right']} / {r['end_observations']['wrong']} |"
+            f"{r['end_observations']['right']} / {r['end_observations']['wrong']} | "
+            f"{r['silent_intervals']} | "
+            + ", ".join(f"{d['away']}+{d['home']}" if d else "-" for d in r["stored"])
+            + " |"
             for name, r in rows.items()
         ),
         "",

@@ -165,6 +165,10 @@ class ImageDatabase:
         """The label stored with image index ``image``."""
         return self._images[image].label
 
+    def count(self, label: int) -> int:
+        """How many stored images carry ``label``."""
+        return sum(1 for image in self._images if image.label == label)
+
     def clear(self) -> None:
         """Forget every image."""
         self._images.clear()

@@ -72,6 +72,15 @@ def test_the_inverted_index_scores_only_images_sharing_a_word() -> None:
     assert len(images) == 0 and len(cosine) == 0
 
 
+def test_images_are_counted_by_label() -> None:
+    database = ImageDatabase(vocabulary(10), RetrievalConfig())
+    for label in (1, -1, 1, 1):
+        database.add([0, 1], [0.0, 0.0], label=label)
+    assert (database.count(1), database.count(-1), database.count(2)) == (3, 1, 0)
+    database.clear()
+    assert database.count(1) == 0
+
+
 def test_a_single_image_database_retrieves_nothing() -> None:
     """Every word of the only image is in every image: idf ln(1 / 1) = 0."""
     database = ImageDatabase(vocabulary(20), RetrievalConfig())

@@ -101,6 +101,46 @@ def test_building_stops_at_max_size() -> None:
     assert len(r.database) == 3
 
 
+def test_building_stores_at_most_max_per_goal_views_of_each_goal() -> None:
+    """With room for two views per goal, the third away view is refused and a home view is
+    still stored (the seed: up to 40 images of each goal area)."""
+    r = recogniser(max_per_goal=2, min_response=1)
+    labels = (AWAY, AWAY, AWAY, HOME)
+    stored = [
+        r.build(view(n), COLUMNS, label, facing_goal=True, post_visible=True)
+        for n, label in enumerate(labels)
+    ]
+    assert stored == [True, True, False, True]
+    assert (r.database.count(AWAY), r.database.count(HOME)) == (2, 1)
+
+
+def with_three_away_and_one_home(**kwargs: object) -> FieldEndRecogniser:
+    """Database: views 0, 2 and 4 facing the away goal, view 1 facing home (each after a
+    frame facing no goal: no query expansion)."""
+    r = recogniser(**kwargs)
+    for n, label in ((0, AWAY), (2, AWAY), (4, AWAY), (1, HOME)):
+        r.build(view(n), COLUMNS, label, facing_goal=False, post_visible=True)
+        assert r.build(view(n), COLUMNS, label, facing_goal=True, post_visible=True)
+    return r
+
+
+@pytest.mark.parametrize(("balance_votes", "votes"), [(True, 2 / 3 - 2), (False, 0.0)])
+def test_votes_are_scaled_by_each_goals_share_of_the_database(
+    balance_votes: bool, votes: float
+) -> None:
+    """A view holding views 0 (away) and 1 (home) side by side hits both. Balanced, with 3
+    away and 1 home images (N = 4) an away hit counts (4 / 2) / 3 = 2/3 and a home hit
+    (4 / 2) / 1 = 2: net -4/3, a home observation at min_consensus 1; unbalanced, 1 - 1 = 0,
+    none."""
+    r = with_three_away_and_one_home(min_consensus=1.0, balance_votes=balance_votes)
+    words = np.concatenate([view(0), view(1)])
+    x = np.concatenate([COLUMNS, COLUMNS + 1.0])
+    belief = r.observe(words, x, facing_goal=True)
+    assert sorted(hit.image for hit in belief.hits) == [0, 3]
+    assert belief.votes == pytest.approx(votes)
+    assert belief.observation == (HOME if balance_votes else 0)
+
+
 def test_building_adds_only_frames_with_fewer_than_min_response_hits() -> None:
     for min_response, expected in ((1, False), (2, True)):
         r = with_two_goals(min_response=min_response)
@@ -122,6 +162,7 @@ def test_building_needs_a_goal_area_and_a_visible_post() -> None:
     ("kwargs", "field"),
     [
         ({"max_size": 0}, "FieldEndConfig.max_size"),
+        ({"max_per_goal": 0}, "FieldEndConfig.max_per_goal"),
         ({"min_response": 0}, "FieldEndConfig.min_response"),
         ({"min_consensus": 0}, "FieldEndConfig.min_consensus"),
         ({"window": 0}, "FieldEndConfig.window"),
@@ -140,6 +181,8 @@ def test_bad_arguments_are_refused() -> None:
         r.build(view(0), COLUMNS, 0, facing_goal=True, post_visible=True)
     with pytest.raises(TypeError, match="facing_goal"):
         r.observe(view(0), COLUMNS, facing_goal=1)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="balance_votes"):
+        FieldEndConfig(balance_votes=1)  # type: ignore[arg-type]
     with pytest.raises(TypeError, match="retrieval"):
         FieldEndConfig(retrieval=None)  # type: ignore[arg-type]
     with pytest.raises(TypeError, match="rng"):

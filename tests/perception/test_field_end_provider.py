@@ -107,6 +107,24 @@ def test_a_camera_facing_the_side_line_is_not_recognised() -> None:
     assert belief.hits == () and belief.certain == 0
 
 
+@pytest.mark.parametrize(("needs_post", "stored"), [(False, 1), (True, 0)])
+def test_a_walk_on_view_needs_a_goal_post_only_when_configured(
+    needs_post: bool, stored: int
+) -> None:
+    """Facing the away goal area with no post detected: stored by default, not with the
+    seed's check."""
+    config = FieldEndProviderConfig(walk_on_s=1.0, walk_on_needs_post=needs_post)
+    provider = NaturalLandmarkFieldEnd(config, CONTEXT)
+    provider.reset(Prior(pose=np.zeros(3), rng=np.random.default_rng(0)))
+    inputs = {
+        HORIZON_FEATURES: view(AWAY),
+        FIELD_FEATURES: (),
+        PREVIOUS + SELF_POSE: estimate(0.0),
+    }
+    provider.update(inputs, 0.0)
+    assert len(provider._recogniser.database) == stored  # type: ignore[union-attr]
+
+
 def test_the_pipeline_runs_the_field_end_before_the_pose_it_reads_late() -> None:
     config = PipelineConfig(
         self_pose="field_features", field_features="oracle", field_end="bag_of_words"
@@ -124,6 +142,8 @@ def test_bad_provider_settings_are_refused() -> None:
         FieldEndProviderConfig(walk_on_s=0.0)
     with pytest.raises(ValueError, match="facing_tolerance_rad"):
         FieldEndProviderConfig(facing_tolerance_rad=2.0)
+    with pytest.raises(TypeError, match="walk_on_needs_post"):
+        FieldEndProviderConfig(walk_on_needs_post=1)  # type: ignore[arg-type]
 
 
 def test_facing_a_goal_area_means_the_optical_axis_meets_the_end_between_the_side_lines() -> None:

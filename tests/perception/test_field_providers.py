@@ -8,9 +8,12 @@ import math
 import numpy as np
 import pytest
 
+from perception.field.features import FieldFeature
+from perception.field.pose_observation import PoseObservation
+from perception.field.sensor_model import SensorModelResult
 from perception.field.visibility import FeatureViewConfig
 from perception.geometry import compose, wrap_angle
-from perception.landmarks.field_end import AWAY, FieldEndBelief
+from perception.landmarks.field_end import AWAY, HOME, FieldEndBelief
 from perception.pipeline import PerceptionPipeline, PipelineConfig
 from perception.providers.base import PerceptionContext
 from perception.providers.field import FieldFeaturePose, RelocalisationConfig
@@ -34,6 +37,19 @@ from perception.types import (
 STATE = CameraState(
     position=np.array([0.05, 0.0, 0.5]), head_yaw=0.0, head_pitch=0.0, tilt=math.radians(20)
 )
+
+
+def belief(observation: int) -> FieldEndBelief:
+    """A field-end belief holding this frame's ``observation`` (+1 away, -1 home, 0 none)."""
+    return FieldEndBelief(
+        p_away=0.5,
+        certain=0,
+        away_observations=0,
+        home_observations=0,
+        votes=2 * observation,
+        hits=(),
+        observation=observation,
+    )
 
 
 def context() -> PerceptionContext:
@@ -112,17 +128,6 @@ def test_field_end_observations_turn_a_mirrored_filter_round() -> None:
     cov = np.array([[0.04, 0.01, 0.003], [0.01, 0.09, -0.002], [0.003, -0.002, 0.01]])
     provider.filter.reset(provider.filter.pose, cov)
 
-    def belief(observation: int) -> FieldEndBelief:
-        return FieldEndBelief(
-            p_away=0.5,
-            certain=0,
-            away_observations=0,
-            home_observations=0,
-            votes=2 * observation,
-            hits=(),
-            observation=observation,
-        )
-
     still = OdometryStep(delta=np.zeros(3), walk_delta=np.zeros(3))
     inputs = {ODOMETRY: still, FIELD_FEATURES: (), "camera_state": STATE}
     for k, observation in enumerate((AWAY, 0, AWAY)):  # two disagreeing views, one frame none
@@ -137,6 +142,74 @@ def test_field_end_observations_turn_a_mirrored_filter_round() -> None:
     for k in range(5):
         provider.update({**inputs, FIELD_END: belief(AWAY)}, 0.4 + 0.1 * k)
     np.testing.assert_allclose(provider.filter.pose, [-1.0, -0.5, -0.2], atol=1e-12)
+    assert provider.half_turns == 1
+
+
+def test_the_evidence_turns_round_with_the_filter() -> None:
+    """After the half turn the three disagreeing views agree: three views of the other end
+    then give P(mirrored) = (1 + 3) / (2 + 3 + 3) = 0.5, and the filter stays (had the window
+    been cleared, they would have turned it straight back)."""
+    config = PipelineConfig()
+    relocalisation = RelocalisationConfig(end_window_frames=10, end_confidence=0.75)
+    provider = FieldFeaturePose(config.sensor_model, config.pose_filter, relocalisation, context())
+    provider.reset(Prior(pose=np.array([1.0, 0.5, math.pi]), rng=np.random.default_rng(0)))
+    still = OdometryStep(delta=np.zeros(3), walk_delta=np.zeros(3))
+    inputs = {ODOMETRY: still, FIELD_FEATURES: (), "camera_state": STATE}
+    for k, observation in enumerate((AWAY, AWAY, AWAY, HOME, HOME, HOME)):
+        provider.update({**inputs, FIELD_END: belief(observation)}, 0.1 * k)
+    np.testing.assert_allclose(provider.filter.pose, [-1.0, -0.5, 0.0], atol=1e-12)
+    assert provider.half_turns == 1
+
+
+def fake_sensor_model(monkeypatch: pytest.MonkeyPatch, pose: np.ndarray) -> np.ndarray:
+    """Every frame's features put the robot at ``pose`` with covariance diag(0.01, 0.02,
+    0.005) (m², m², rad²) and a correlation of x and y; returns that covariance."""
+    cov = np.array([[0.01, 0.004, 0.0], [0.004, 0.02, 0.0], [0.0, 0.0, 0.005]])
+    observation = PoseObservation(pose, np.linalg.inv(cov), 0.01, 4)
+
+    def observe(*args: object) -> SensorModelResult:
+        return SensorModelResult(observation, pose, 0.01, 1, ())
+
+    monkeypatch.setattr("perception.providers.field.observe_pose", observe)
+    return cov
+
+
+@pytest.mark.parametrize(
+    ("lost_at", "kept"),
+    [
+        ((1.7, -0.3), True),  # 0.2 m from the twin: the same place, the evidence kept
+        ((1.5, 1.5), False),  # 1.8 m from the twin (3.2 m from the truth): a kidnap
+    ],
+)
+def test_a_relocalisation_restarts_on_the_twin_nearer_the_filter(
+    monkeypatch: pytest.MonkeyPatch, lost_at: tuple[float, float], kept: bool
+) -> None:
+    """The features say (-1.5, 0.3, 0.1); the filter, pinned near (1.5, -0.3), refuses them
+    for ``after_refused_frames`` frames, then restarts on the twin (1.5, -0.3, 0.1 + pi), the
+    nearer, with the covariance turned round (over the share fused). Two views of the away
+    end came while it faced home; kept, a third turns it round ((1 + 3) / (2 + 3) > 0.75);
+    cleared, it does not."""
+    truth = np.array([-1.5, 0.3, 0.1])
+    cov = fake_sensor_model(monkeypatch, truth)
+    config = PipelineConfig()
+    relocalisation = RelocalisationConfig(after_refused_frames=8, end_confidence=0.75)
+    provider = FieldFeaturePose(config.sensor_model, config.pose_filter, relocalisation, context())
+    provider.reset(Prior(pose=np.array([*lost_at, 0.1 + math.pi]), rng=np.random.default_rng(0)))
+    provider.filter.reset(provider.filter.pose, 1e-6 * np.eye(3))
+    still = OdometryStep(delta=np.zeros(3), walk_delta=np.zeros(3))
+    post = FieldFeature("goal_post", np.array([[2.0, 0.1]]), 1e-4 * np.eye(2)[None])
+    inputs = {ODOMETRY: still, FIELD_FEATURES: (post,), "camera_state": STATE}
+    for k in range(8):
+        provider.update({**inputs, FIELD_END: belief(AWAY if k < 2 else 0)}, 0.1 * k)
+    assert provider.relocalisations == 1 and provider.half_turns == 0
+    twin = np.array([1.5, -0.3, wrap_angle(0.1 + math.pi)])
+    np.testing.assert_allclose(provider.filter.pose, twin, atol=1e-12)
+    flip = np.diag([-1.0, -1.0, 1.0])
+    weight = config.pose_filter.observation_weight  # the share of the information fused
+    np.testing.assert_allclose(provider.filter.cov, flip @ cov @ flip / weight, atol=1e-12)
+    provider.update({**inputs, FIELD_FEATURES: (), FIELD_END: belief(AWAY)}, 0.8)
+    assert provider.half_turns == (1 if kept else 0)
+    np.testing.assert_allclose(provider.filter.pose, truth if kept else twin, atol=1e-12)
 
 
 def test_bad_relocalisation_settings_are_refused() -> None:
@@ -144,3 +217,5 @@ def test_bad_relocalisation_settings_are_refused() -> None:
         RelocalisationConfig(end_confidence=0.4)
     with pytest.raises((ValueError, TypeError), match="end_window_frames"):
         RelocalisationConfig(end_window_frames=0)
+    with pytest.raises(ValueError, match="same_place_m"):
+        RelocalisationConfig(same_place_m=-0.1)
