@@ -13,43 +13,15 @@ policy, each robot mapped to its team's; ``--policies shared`` trains one policy
 
 from __future__ import annotations
 
-import argparse
-from pathlib import Path
-
 from agents.rllib.envs import TEAM_ENV
-from agents.rllib.training import init_ray, ppo_config, train, with_team_policies
+from agents.rllib.training import example_config, example_parser, run_example, with_team_policies
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--iterations", type=int, default=20)
+    parser = example_parser(__doc__.split("\n")[0])
     parser.add_argument("--policies", choices=("team", "shared"), default="team")
-    parser.add_argument("--env-runners", type=int, default=1, help="parallel sampling processes")
-    parser.add_argument("--address", default=None, help="Ray cluster address (default: local)")
-    parser.add_argument("--episode-s", type=float, default=60.0)
-    parser.add_argument("--batch", type=int, default=4000, help="env steps per iteration")
-    parser.add_argument("--minibatch", type=int, default=500)
-    parser.add_argument("--epochs", type=int, default=10)
-    parser.add_argument("--lr", type=float, default=3e-4)
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--out", type=Path, default=None, help="checkpoint folder")
     args = parser.parse_args(argv)
-    init_ray(args.address, args.env_runners)
-    config = ppo_config(
-        TEAM_ENV,
-        {"episode_s": args.episode_s},
-        args.env_runners,
-        args.batch,
-        args.minibatch,
-        args.epochs,
-        args.lr,
-        args.seed,
-    )
-    algo = with_team_policies(config, args.policies).build_algo()
-    try:
-        train(algo, args.iterations, args.out)
-    finally:
-        algo.stop()
+    run_example(with_team_policies(example_config(TEAM_ENV, args), args.policies), args)
 
 
 if __name__ == "__main__":

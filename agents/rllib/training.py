@@ -7,6 +7,7 @@ installed, as the env runners build the envs where they run).
 
 from __future__ import annotations
 
+import argparse
 import math
 import os
 import time
@@ -130,3 +131,47 @@ def train(algo: Algorithm, iterations: int, out: Path | None) -> list[dict[str, 
         algo.save_to_path(out.resolve())
         print(f"checkpoint: {out}")
     return results
+
+
+def example_parser(description: str) -> argparse.ArgumentParser:
+    """The examples' shared command line: iterations, env runners, the cluster's address, the
+    episode length, PPO's batch, minibatch, epochs and learning rate, the seed and a
+    checkpoint folder."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--iterations", type=int, default=20)
+    parser.add_argument("--env-runners", type=int, default=1, help="parallel sampling processes")
+    parser.add_argument("--address", default=None, help="Ray cluster address (default: local)")
+    parser.add_argument("--episode-s", type=float, default=60.0)
+    parser.add_argument("--batch", type=int, default=4000, help="env steps per iteration")
+    parser.add_argument("--minibatch", type=int, default=500)
+    parser.add_argument("--epochs", type=int, default=10)
+    parser.add_argument("--lr", type=float, default=3e-4)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--out", type=Path, default=None, help="checkpoint folder")
+    return parser
+
+
+def example_config(env: str, args: argparse.Namespace) -> PPOConfig:
+    """Ray started (:func:`init_ray`) and PPO configured (:func:`ppo_config`) on the registered
+    env ``env`` as an example's parsed ``args`` (:func:`example_parser`) say."""
+    init_ray(args.address, args.env_runners)
+    return ppo_config(
+        env,
+        {"episode_s": args.episode_s},
+        args.env_runners,
+        args.batch,
+        args.minibatch,
+        args.epochs,
+        args.lr,
+        args.seed,
+    )
+
+
+def run_example(config: PPOConfig, args: argparse.Namespace) -> None:
+    """Build the algorithm of ``config``, train ``args.iterations`` iterations (:func:`train`,
+    checkpoint to ``args.out``) and stop it."""
+    algo = config.build_algo()
+    try:
+        train(algo, args.iterations, args.out)
+    finally:
+        algo.stop()
