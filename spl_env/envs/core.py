@@ -327,6 +327,35 @@ def check_camera_mode(config: EnvConfig, pipeline: PerceptionPipeline) -> None:
     )
 
 
+def field_world_state(
+    time_s: float,
+    scene: SplFieldScene,
+    robots: list[NaoRobot],
+    names: tuple[str, ...],
+    teams: NDArray[np.int64],
+    blocked: NDArray[np.bool_],
+    agent: int,
+) -> WorldState:
+    """The ground truth now on the SPL field ``scene`` with ``robots`` (named ``names``, of
+    ``teams``, ``blocked`` this step), robot ``agent`` the one a policy drives."""
+    ball, ball_velocity = scene.ball_state()
+    return WorldState(
+        time_s=time_s,
+        names=names,
+        kinds=tuple("nao" for _ in robots),
+        teams=teams,
+        poses=np.array([r.pose for r in robots]),
+        heads=np.array([r.head for r in robots]),
+        blocked=blocked.copy(),
+        agent=agent,
+        ball=ball,
+        ball_velocity=ball_velocity,
+        landmarks=scene.landmarks,
+        landmark_ids=scene.landmark_ids,
+        circles=scene.obstacles,
+    )
+
+
 def info_layout(config: EnvConfig, scene: SplFieldScene) -> InfoLayout:
     """The fixed sizes of an SPL env's ``info``."""
     return InfoLayout(
@@ -473,21 +502,8 @@ class SplEnv(RobotEnv[WorldState]):
         return dataclasses.replace(frame, kick_velocity=self._kick_velocity.copy()), times
 
     def _world_state(self) -> WorldState:
-        ball, ball_velocity = self.scene.ball_state()
-        return WorldState(
-            time_s=self._time_s,
-            names=self._names,
-            kinds=tuple("nao" for _ in self.robots),
-            teams=self._teams,
-            poses=np.array([r.pose for r in self.robots]),
-            heads=np.array([r.head for r in self.robots]),
-            blocked=self._blocked.copy(),
-            agent=AGENT,
-            ball=ball,
-            ball_velocity=ball_velocity,
-            landmarks=self.scene.landmarks,
-            landmark_ids=self.scene.landmark_ids,
-            circles=self.scene.obstacles,
+        return field_world_state(
+            self._time_s, self.scene, self.robots, self._names, self._teams, self._blocked, AGENT
         )
 
     def _ground_truth_info(self, state: WorldState) -> dict[str, Any]:

@@ -49,6 +49,7 @@ from perception.types import SensorFrame, SlamEstimate
 from perception.validation import check_int, check_positive
 from spl_env.envs.core import (
     check_camera_mode,
+    field_world_state,
     info_layout,
     perception_context,
     perception_outputs,
@@ -593,21 +594,8 @@ class TeamEnv(ParallelEnv[str, dict[str, np.ndarray], np.ndarray]):
 
     def _world_state(self) -> WorldState:
         """The ground truth now (``agent`` 0)."""
-        ball, ball_velocity = self.scene.ball_state()
-        return WorldState(
-            time_s=self._time_s,
-            names=self._names,
-            kinds=tuple("nao" for _ in self.robots),
-            teams=self._teams,
-            poses=np.array([r.pose for r in self.robots]),
-            heads=np.array([r.head for r in self.robots]),
-            blocked=self._blocked.copy(),
-            agent=0,
-            ball=ball,
-            ball_velocity=ball_velocity,
-            landmarks=self.scene.landmarks,
-            landmark_ids=self.scene.landmark_ids,
-            circles=self.scene.obstacles,
+        return field_world_state(
+            self._time_s, self.scene, self.robots, self._names, self._teams, self._blocked, 0
         )
 
     def _ball_distances(self, ball: FloatArray) -> FloatArray:
