@@ -17,7 +17,6 @@ step loop of its own.
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from abc import abstractmethod
 from collections.abc import Mapping
@@ -489,7 +488,7 @@ class SplEnv(RobotEnv[WorldState]):
         state = self._state
         assert state is not None  # set by reset() and step() before sensing
         truth = state.truth_for(AGENT) if "truth" in self.pipeline.frame_inputs else None
-        frame, times = self.rig.sense(
+        return self.rig.sense(
             self.world,
             self._time_s,
             self._engine_delta,
@@ -498,8 +497,8 @@ class SplEnv(RobotEnv[WorldState]):
             render=self._render_image,
             render_bottom=self._render_bottom,
             truth=truth,
+            kick_velocity=self._kick_velocity,
         )
-        return dataclasses.replace(frame, kick_velocity=self._kick_velocity.copy()), times
 
     def _world_state(self) -> WorldState:
         return field_world_state(

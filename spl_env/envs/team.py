@@ -573,7 +573,7 @@ class TeamEnv(ParallelEnv[str, dict[str, np.ndarray], np.ndarray]):
         assert state is not None  # set by reset() and step() before sensing
         totals = {"physics": physics_s, "render": 0.0, "sensors": 0.0, "perception": 0.0}
         for k, player in enumerate(self.players):
-            frame, sensed = player.rig.sense(
+            player.frame, sensed = player.rig.sense(
                 self.world,
                 self._time_s,
                 player.engine_delta,
@@ -582,8 +582,8 @@ class TeamEnv(ParallelEnv[str, dict[str, np.ndarray], np.ndarray]):
                 render=self._render_image,
                 render_bottom=self._render_bottom,
                 truth=state.truth_for(k) if player.truth_input else None,
+                kick_velocity=player.kick_velocity,
             )
-            player.frame = dataclasses.replace(frame, kick_velocity=player.kick_velocity.copy())
             t0 = time.perf_counter()
             player.output = player.pipeline.step(player.frame)
             totals["perception"] += time.perf_counter() - t0

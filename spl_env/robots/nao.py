@@ -192,10 +192,16 @@ def kick_angle(config: RobotConfig, action: float) -> float:
     return float(action) * config.kick_max_angle_rad
 
 
+def kick_aim(config: RobotConfig, angle_rad: float) -> float:
+    """A kick's direction (rad, off the heading): ``angle_rad`` clipped to the foot's reach
+    ``kick_max_angle_rad``."""
+    return float(np.clip(angle_rad, -config.kick_max_angle_rad, config.kick_max_angle_rad))
+
+
 def kick_intent(config: RobotConfig, angle_rad: float, strength: float) -> FloatArray:
     """The ball velocity (2,) (m/s, robot frame) a kick towards ``angle_rad`` off the heading
-    (clipped to ``kick_max_angle_rad``) at ``strength`` (0-1] means to give, before its noise."""
-    aim = float(np.clip(angle_rad, -config.kick_max_angle_rad, config.kick_max_angle_rad))
+    (:func:`kick_aim`) at ``strength`` (0-1] means to give, before its noise."""
+    aim = kick_aim(config, angle_rad)
     return config.kick_speed_mps * strength * np.array([math.cos(aim), math.sin(aim)])
 
 
@@ -368,11 +374,11 @@ class NaoRobot:
         if not self.in_kick_zone(ball_xy):
             return None
         cfg = self.config
-        intent = kick_intent(cfg, angle_rad, strength)
         noise = rng.normal(0.0, 1.0, size=2)
-        direction = self.pose[2] + math.atan2(intent[1], intent[0])
-        direction += cfg.kick_angle_std_rad * noise[0]
-        speed = max(float(np.hypot(*intent)) * (1.0 + cfg.kick_speed_std_fraction * noise[1]), 0.0)
+        direction = self.pose[2] + kick_aim(cfg, angle_rad) + cfg.kick_angle_std_rad * noise[0]
+        speed = max(
+            cfg.kick_speed_mps * strength * (1.0 + cfg.kick_speed_std_fraction * noise[1]), 0.0
+        )
         return speed * np.array([math.cos(direction), math.sin(direction)])
 
     def move_head(self, target: FloatArray, dt_s: float) -> None:

@@ -120,6 +120,7 @@ class NaoRig:
         render: bool,
         render_bottom: bool = False,
         truth: GroundTruth | None = None,
+        kick_velocity: FloatArray | None = None,
     ) -> tuple[SensorFrame, dict[str, float]]:
         """This step's frame: the image (when ``render``; the bottom camera's too with
         ``render_bottom``: pitched 39.7 degrees further down, same intrinsics) or the emulated
@@ -127,8 +128,10 @@ class NaoRig:
         ``engine_delta`` (3,).
 
         ``yaw_rate_rps`` is the camera's turn rate this frame (rad/s), for motion blur;
-        ``truth`` is passed on for oracle providers. Also returns the seconds spent rendering
-        (or emulating), ``"render"``, and in the other sensors, ``"sensors"``.
+        ``truth`` is passed on for oracle providers; ``kick_velocity`` (2,) is the ball
+        velocity (m/s, robot frame) the motion's kick this step meant to give (none: zero).
+        Also returns the seconds spent rendering (or emulating), ``"render"``, and in the other
+        sensors, ``"sensors"``.
         """
         t0 = time.perf_counter()
         robot, cam = self.robot, self.config.camera
@@ -174,6 +177,7 @@ class NaoRig:
             sonar_model=self.sonar.model if self.sonar is not None else None,
             laser=laser,
             laser_model=self.laser.model if self.laser is not None else None,
+            kick_velocity=np.zeros(2) if kick_velocity is None else kick_velocity.copy(),
             emulated=emulated,
             truth=truth,
         )

@@ -13,7 +13,14 @@ from perception.representations import PerceptionOutput
 from perception.validation import check_positive
 from spl_env.robots.nao import NaoCommand, NaoRobot, walk_target
 from spl_env.tasks.base import TaskContext
-from spl_env.tasks.soccer import SoccerTask, SoccerTaskConfig, ball_in_goal, ball_out, goal_centre
+from spl_env.tasks.soccer import (
+    ShotWatch,
+    SoccerTask,
+    SoccerTaskConfig,
+    ball_in_goal,
+    ball_out,
+    goal_centre,
+)
 from spl_env.tasks.soccer_skills import approach_and_kick
 from spl_env.world_state import WorldState
 
@@ -26,8 +33,6 @@ class GoalieTaskConfig(SoccerTaskConfig):
     episode_s: float = 30.0
     shot_distance_m: tuple[float, float] = (1.5, 3.5)  # the ball starts this far out (m)
     save_reward: float = 1.0  # reward when a kicked ball stops (or leaves) without a goal
-    kicked_speed_mps: float = 0.3  # a ball this fast has been kicked
-    stopped_speed_mps: float = 0.05  # a kicked ball this slow is over
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -43,13 +48,6 @@ class GoalieTaskConfig(SoccerTaskConfig):
                 f"{self.shot_distance_m}"
             )
         check_positive(owner, "save_reward", self.save_reward, allow_zero=True)
-        for name in ("kicked_speed_mps", "stopped_speed_mps"):
-            check_positive(owner, name, getattr(self, name))
-        if not self.stopped_speed_mps < self.kicked_speed_mps:
-            raise ValueError(
-                f"{owner}.stopped_speed_mps must be < kicked_speed_mps, got "
-                f"{self.stopped_speed_mps} and {self.kicked_speed_mps}"
-            )
 
 
 class GoalieTask(SoccerTask):
@@ -69,10 +67,10 @@ class GoalieTask(SoccerTask):
     def __init__(self, config: GoalieTaskConfig, context: TaskContext) -> None:
         super().__init__(config, context)
         self._target = np.zeros(2)
-        self._kicked = False
+        self._shot = ShotWatch(config)
 
     def our_start(self, rng: np.random.Generator) -> FloatArray:
-        self._kicked = False
+        self._shot.reset()
         dims = self.context.dimensions
         return np.array([-dims.half_length_m + 0.2, rng.uniform(-0.3, 0.3), 0.0])
 
@@ -98,7 +96,7 @@ class GoalieTask(SoccerTask):
         others = state.others
         robot = self.context.robot
         kicker = NaoCommand()  # after its kick the kicker stands
-        if not self._kicked:
+        if not self._shot.kicked:
             skill = approach_and_kick(
                 state.poses[others[0]], state.ball, self._target, robot, self.config.skills
             )
@@ -116,9 +114,7 @@ class GoalieTask(SoccerTask):
         """Whether a goal was conceded, and whether the shot is otherwise over (saved)."""
         dims = self.context.dimensions
         conceded = ball_in_goal(state.ball, dims) == -1
-        speed = float(np.hypot(*state.ball_velocity))
-        self._kicked = self._kicked or speed >= self.config.kicked_speed_mps
-        stopped = self._kicked and speed < self.config.stopped_speed_mps
+        stopped = self._shot.stopped(state.ball_velocity)
         saved = not conceded and (stopped or ball_out(state.ball, dims))
         return conceded, saved
 

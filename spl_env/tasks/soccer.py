@@ -83,6 +83,8 @@ class SoccerTaskConfig(TaskConfig):
     max_tracked_robots: int = 4  # K: track rows in the observation (nearest first)
     skills: SkillConfig = field(default_factory=SkillConfig)  # the scripted players'
     goal_reward: float = 10.0  # reward for a goal scored (the negative for one conceded)
+    kicked_speed_mps: float = 0.3  # a ball this fast has been kicked (ShotWatch)
+    stopped_speed_mps: float = 0.05  # a kicked ball this slow is over: missed or saved
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -107,6 +109,13 @@ class SoccerTaskConfig(TaskConfig):
             raise ValueError(f"{owner}.scan_pitch_rad must be finite, got {self.scan_pitch_rad}")
         check_int(owner, "max_tracked_robots", self.max_tracked_robots, 1)
         check_positive(owner, "goal_reward", self.goal_reward, allow_zero=True)
+        for name in ("kicked_speed_mps", "stopped_speed_mps"):
+            check_positive(owner, name, getattr(self, name))
+        if not self.stopped_speed_mps < self.kicked_speed_mps:
+            raise ValueError(
+                f"{owner}.stopped_speed_mps must be < kicked_speed_mps, got "
+                f"{self.stopped_speed_mps} and {self.kicked_speed_mps}"
+            )
 
     @property
     def other_robot_teams(self) -> tuple[int, ...]:
@@ -132,6 +141,31 @@ def ball_out(ball: FloatArray, dims: FieldDimensions) -> bool:
 def goal_centre(dims: FieldDimensions, side: int) -> FloatArray:
     """The centre (2,) of the opponent goal's line (``side`` +1) or ours (-1)."""
     return np.array([side * dims.half_length_m, 0.0])
+
+
+class ShotWatch:
+    """Whether a shot is over: the ball was kicked (faster than ``kicked_speed_mps``) and has
+    slowed below ``stopped_speed_mps`` since. :meth:`reset` per episode, :meth:`stopped`
+    every step with the true ball velocity (it may be asked more than once a step)."""
+
+    def __init__(self, config: SoccerTaskConfig) -> None:
+        self.config = config
+        self._kicked = False
+
+    def reset(self) -> None:
+        """A new episode: nothing kicked yet."""
+        self._kicked = False
+
+    @property
+    def kicked(self) -> bool:
+        """Whether the ball has been kicked this episode (as last seen by :meth:`stopped`)."""
+        return self._kicked
+
+    def stopped(self, ball_velocity: FloatArray) -> bool:
+        """Whether the ball, moving at ``ball_velocity`` (2,) (m/s), stopped after a kick."""
+        speed = float(np.hypot(*ball_velocity))
+        self._kicked = self._kicked or speed >= self.config.kicked_speed_mps
+        return self._kicked and speed < self.config.stopped_speed_mps
 
 
 def soccer_command(

@@ -71,8 +71,12 @@ class StrikerTask(SoccerTask):
         placed.append(goalie)
         self.wanderers.reset(rng, defenders, self.context.placement, placed)
         ball = np.array([rng.uniform(0.0, 2.5), rng.uniform(-2.0, 2.0)])
-        self._last_distance = float(np.hypot(*(ball - goal_centre(dims, 1))))
+        self._last_distance = self.goal_distance(ball)
         return ball
+
+    def goal_distance(self, ball: FloatArray) -> float:
+        """The ball's (2,) distance (m) to the opponent goal's centre."""
+        return float(np.hypot(*(ball - goal_centre(self.context.dimensions, 1))))
 
     def scripted_commands(self, state: WorldState) -> list[NaoCommand]:
         others = state.others
@@ -89,7 +93,7 @@ class StrikerTask(SoccerTask):
 
     def reward_terms(self, state: WorldState, output: PerceptionOutput) -> dict[str, float]:
         c, dims = self.config, self.context.dimensions
-        distance = float(np.hypot(*(state.ball - goal_centre(dims, 1))))
+        distance = self.goal_distance(state.ball)
         progress, self._last_distance = self._last_distance - distance, distance
         goal = ball_in_goal(state.ball, dims)
         out = ball_out(state.ball, dims) and goal == 0
