@@ -16,6 +16,7 @@ truth). Built from the env's config (``from_config``).
 from __future__ import annotations
 
 import math
+from abc import abstractmethod
 
 import numpy as np
 
@@ -23,7 +24,7 @@ from agents.baselines import ScriptedPolicy
 from perception.geometry import FloatArray
 from spl_env.config import EnvConfig
 from spl_env.observations.poles import RANGE_SCALE_M
-from spl_env.robots.nao import RobotConfig, in_kick_zone
+from spl_env.robots.nao import in_kick_zone
 from spl_env.tasks.soccer import goal_centre
 from spl_env.tasks.soccer_skills import (
     SkillCommand,
@@ -81,20 +82,14 @@ def tracked_robots(obs: dict[str, np.ndarray], pose: FloatArray) -> FloatArray:
 class SoccerPolicy(ScriptedPolicy):
     """Base: the field, the skills, and the action of a :class:`SkillCommand`."""
 
-    def __init__(
-        self,
-        robot: RobotConfig,
-        control_dt_s: float,
-        config: EnvConfig,
-        skills: SkillConfig | None = None,
-    ) -> None:
-        super().__init__(robot, control_dt_s)
+    def __init__(self, config: EnvConfig, skills: SkillConfig | None = None) -> None:
+        super().__init__(config.robot, config.control_dt_s)
         self.dimensions = config.scene.dimensions
         self.skills = skills if skills is not None else SkillConfig()
 
     @classmethod
     def from_config(cls, config: EnvConfig) -> SoccerPolicy:
-        return cls(config.robot, config.control_dt_s, config)
+        return cls(config)
 
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         pose = believed_pose(obs, self.dimensions.carpet_size_m)
@@ -103,9 +98,9 @@ class SoccerPolicy(ScriptedPolicy):
             return self.action(SkillCommand(walk=np.array([0.0, 0.0, SEARCH_TURN]), kick=False))
         return self.action(self.skill(obs, pose, ball))
 
+    @abstractmethod
     def skill(self, obs: dict[str, np.ndarray], pose: FloatArray, ball: FloatArray) -> SkillCommand:
         """What to do with the ball believed at ``ball`` (2,) from ``pose`` (3,)."""
-        raise NotImplementedError
 
     def action(self, command: SkillCommand) -> np.ndarray:
         """The env action (5,) float32: the walk, a full-strength kick or none, its direction
