@@ -489,13 +489,12 @@ def fig14(scene_seeds: list[int], seed: int) -> dict[str, Any]:
                     views.turn.scene.spectators.reset(np.random.default_rng([seed, scene_seed]))
                 stored = store(views, np.random.default_rng([seed, scene_seed, 99]))
                 database = recogniser(vocabulary, stored, seed).database
-                labels = [database.label(i) for i in range(len(database))]
                 names = ("spectators",) if spectators else CONDITIONS[:-1]
                 for condition in names:
                     if condition == "no goals":
                         views.remove_goals()
                     result[condition] = {
-                        "stored": {"away": labels.count(AWAY), "home": labels.count(HOME)},
+                        "stored": {"away": database.count(AWAY), "home": database.count(HOME)},
                         "trials": run_condition(views, stored, condition, scene_seed, seed),
                     }
             finally:

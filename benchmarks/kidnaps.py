@@ -125,8 +125,8 @@ def _database_labels(core: SplEnv) -> dict[str, int]:
     recogniser = getattr(provider, "_recogniser", None)
     if recogniser is None:
         return {}
-    labels = [recogniser.database.label(i) for i in range(len(recogniser.database))]
-    return {"away": labels.count(AWAY), "home": labels.count(HOME)}
+    database = recogniser.database
+    return {"away": database.count(AWAY), "home": database.count(HOME)}
 
 
 def _trace_step(

@@ -30,6 +30,7 @@ Geometric verification always uses this frame's features ``words`` and ``x``.
 
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -152,6 +153,7 @@ class ImageDatabase:
         self._images: list[_Image] = []
         self._postings: list[list[int]] = [[] for _ in range(len(vocabulary))]
         self._document_frequency = np.zeros(len(vocabulary), dtype=np.int64)
+        self._labels: Counter[int] = Counter()  # stored images per label
 
     def __len__(self) -> int:
         return len(self._images)
@@ -161,17 +163,14 @@ class ImageDatabase:
         """(K,) the number of stored images holding each word (a copy)."""
         return self._document_frequency.copy()
 
-    def label(self, image: int) -> int:
-        """The label stored with image index ``image``."""
-        return self._images[image].label
-
     def count(self, label: int) -> int:
         """How many stored images carry ``label``."""
-        return sum(1 for image in self._images if image.label == label)
+        return self._labels[label]
 
     def clear(self) -> None:
         """Forget every image."""
         self._images.clear()
+        self._labels.clear()
         for posting in self._postings:
             posting.clear()
         self._document_frequency[:] = 0
@@ -187,6 +186,7 @@ class ImageDatabase:
         vector = word_counts(ids, self.vocabulary) if counts is None else self._counts(counts)
         image = len(self._images)
         self._images.append(_Image(counts=vector, words=ids, x=columns, label=int(label)))
+        self._labels[int(label)] += 1
         for word in np.flatnonzero(vector).tolist():
             self._postings[word].append(image)
         self._document_frequency += vector > 0

@@ -135,7 +135,7 @@ class FieldEndRecogniser:
         self.config = config
         self.rng = rng
         self.database = ImageDatabase(vocabulary, config.retrieval)
-        self._window: deque[tuple[int, int]] = deque(maxlen=config.window)
+        self._window: deque[int] = deque(maxlen=config.window)  # observations, 0 for none
         self._previous: IntArray | None = None  # last processed frame's counts
         self._previous_label: int | None = None  # ... and its label while building
 
@@ -149,18 +149,19 @@ class FieldEndRecogniser:
         self, words: ArrayLike, x: ArrayLike, label: int, *, facing_goal: bool, post_visible: bool
     ) -> bool:
         """Walk-on frame with features' words (N,) and columns ``x`` (N,) (px), facing the
-        ``label`` goal (:data:`AWAY` or :data:`HOME`). Returns whether it was stored."""
+        ``label`` goal (:data:`AWAY` or :data:`HOME`; not read when not ``facing_goal``).
+        Returns whether it was stored."""
         check_bool("FieldEndRecogniser.build", "facing_goal", facing_goal)
         check_bool("FieldEndRecogniser.build", "post_visible", post_visible)
+        if not (facing_goal and post_visible):
+            self._previous = self._previous_label = None
+            return False
         check_int("FieldEndRecogniser.build", "label", label)
         if label not in (AWAY, HOME):
             raise ValueError(
                 f"FieldEndRecogniser.build.label must be AWAY ({AWAY}) or HOME ({HOME}), "
                 f"got {label!r}"
             )
-        if not (facing_goal and post_visible):
-            self._previous = self._previous_label = None
-            return False
         counts = self._expanded(words, same_label=label)
         self._previous_label = label
         if (
@@ -188,9 +189,8 @@ class FieldEndRecogniser:
         votes = self._votes(hits)
         consensus = self.config.min_consensus
         observation = AWAY if votes >= consensus else HOME if votes <= -consensus else 0
-        self._window.append((int(observation == AWAY), int(observation == HOME)))
-        k = sum(away for away, _ in self._window)
-        j = sum(home for _, home in self._window)
+        self._window.append(observation)
+        k, j = self._window.count(AWAY), self._window.count(HOME)
         p_away = (1 + k) / (2 + k + j)
         certain = 0
         if p_away > self.config.confidence:

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from perception.geometry import FloatArray, wrap_angle
+from perception.geometry import FloatArray, wrap_scalar
 from perception.landmarks.horizon_features import HorizonFeatures
 from perception.landmarks.matching import MatchingConfig, match_features
 from perception.validation import check_int, check_positive
@@ -181,7 +181,7 @@ class VisualHeadingOdometry:
             modes = shift_modes(shifts, self.config)
             most_votes = max(most_votes, modes.confidence)
             head_turn = features.head_yaw - frame.features.head_yaw
-            delta = float(wrap_angle(frame.heading + modes.turn - head_turn - last.heading))
+            delta = wrap_scalar(frame.heading + modes.turn - head_turn - last.heading)
             usable = modes.confidence >= self.config.min_confidence and math.isfinite(delta)
             if not usable or abs(delta - walk_delta_rad) > self.config.max_disagreement_rad:
                 continue
@@ -212,8 +212,6 @@ class CollisionDetector:
         """Fold in one frame's heading changes (rad); 1 when the body turns left of the walk
         (the average is above the bound), -1 right (below minus the bound), else 0."""
         a = self.config.collision_smoothing
-        self.average = (1 - a) * self.average + a * float(
-            wrap_angle(visual_delta_rad - walk_delta_rad)
-        )
+        self.average = (1 - a) * self.average + a * wrap_scalar(visual_delta_rad - walk_delta_rad)
         bound = self.config.collision_bound_rad
         return 1 if self.average > bound else -1 if self.average < -bound else 0

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from perception.geometry import FloatArray
+from perception.geometry import FloatArray, range_bearing
 from perception.landmarks.field_end import (
     AWAY,
     HOME,
@@ -139,7 +139,7 @@ class NaturalLandmarkFieldEnd(Provider):
             self._recogniser.build(
                 words,
                 x,
-                facing or AWAY,  # the label of a frame not facing a goal area is never read
+                facing,
                 facing_goal=facing != 0,
                 post_visible=post_visible,
             )
@@ -150,13 +150,8 @@ class NaturalLandmarkFieldEnd(Provider):
         """(N,) bool: the features between the bearings of the ``end`` goal's posts seen from
         ``pose`` (3,) (field frame), widened by ``goal_margin_rad``."""
         posts = self.field.goal_posts()[2:] if end == AWAY else self.field.goal_posts()[:2]
-        heading = pose[2] + seen.head_yaw
-        bearings = np.array(
-            [
-                math.remainder(math.atan2(y - pose[1], x - pose[0]) - heading, math.tau)
-                for x, y in posts
-            ]
-        )
+        camera = np.array([pose[0], pose[1], pose[2] + seen.head_yaw])
+        bearings = range_bearing(camera, posts)[:, 1]
         margin = self.config.goal_margin_rad
         low, high = bearings.min() - margin, bearings.max() + margin
         return (seen.bearings >= low) & (seen.bearings <= high)
@@ -167,10 +162,15 @@ class NaturalLandmarkFieldEnd(Provider):
         field = self.field
         rays = pose[2] + seen.head_yaw + seen.bearings
         towards = np.cos(rays) * end > 1e-9
-        edge_x = end * (field.half_length_m + field.border_strip_m)
         with np.errstate(invalid="ignore", divide="ignore"):
-            y_hit = pose[1] + np.tan(rays) * (edge_x - pose[0])
+            y_hit = self._edge_y(pose, rays, end)
         return towards & (np.abs(y_hit) <= field.half_width_m + field.border_strip_m)
+
+    def _edge_y(self, pose: FloatArray, rays: FloatArray | float, end: int) -> FloatArray:
+        """Where rays from ``pose`` (3,) at field headings ``rays`` (rad) cross the ``end``'s
+        carpet edge: their y (m, field frame)."""
+        edge_x = end * (self.field.half_length_m + self.field.border_strip_m)
+        return pose[1] + np.tan(rays) * (edge_x - pose[0])
 
     def _facing(self, pose: FloatArray, heading: float) -> int:
         """AWAY when the camera at ``pose`` (3,) (m, m, rad, field frame) with field heading
@@ -182,6 +182,5 @@ class NaturalLandmarkFieldEnd(Provider):
             end = HOME
         else:
             return 0
-        edge_x = end * (self.field.half_length_m + self.field.border_strip_m)
-        axis_y = pose[1] + math.tan(heading) * (edge_x - pose[0])
+        axis_y = float(self._edge_y(pose, heading, end))
         return end if abs(axis_y) <= self.field.half_width_m else 0

@@ -6,7 +6,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pytest
 
 from perception.landmarks.horizon_features import (
     HorizonFeatureConfig,
@@ -86,9 +85,3 @@ def test_the_reported_odometry_passes_the_walk_through() -> None:
     assert not step.visual and step.collision == 0
 
 
-@pytest.mark.parametrize("pitch", [-0.2, 0.3])
-def test_bearings_do_not_depend_on_the_head_yaw(pitch: float) -> None:
-    image = bars([80, 200])
-    a = horizon_features(image, CAMERA, level(0.0, pitch), HorizonFeatureConfig())
-    b = horizon_features(image, CAMERA, level(1.0, pitch), HorizonFeatureConfig())
-    np.testing.assert_array_equal(a.bearings, b.bearings)
