@@ -160,8 +160,15 @@ class FieldFeature:
     def distance_m(self) -> float:
         """Distance (m) from the robot origin to the feature's nearest point (a segment's
         nearest end, or its nearest point between them)."""
-        if self.kind not in SEGMENT_KINDS:
-            return float(np.hypot(*self.points[0]))
-        a, b = self.points
-        t = float(np.clip(-(a @ (b - a)) / float((b - a) @ (b - a)), 0.0, 1.0))
-        return float(np.hypot(*(a + t * (b - a))))
+        return feature_distance(self.kind, self.points)
+
+
+def feature_distance(kind: str, points: FloatArray) -> float:
+    """The distance (m) from the robot origin to the nearest point of a feature of ``kind`` at
+    ``points`` (P, 2), robot frame: a segment's nearest point between its ends, else its
+    first point."""
+    if kind not in SEGMENT_KINDS:
+        return float(np.hypot(*points[0]))
+    a, b = points
+    t = float(np.clip(-(a @ (b - a)) / float((b - a) @ (b - a)), 0.0, 1.0))
+    return float(np.hypot(*(a + t * (b - a))))

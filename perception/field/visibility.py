@@ -38,6 +38,7 @@ from perception.field.features import (
     FEATURE_KINDS,
     SEGMENT_KINDS,
     FieldFeature,
+    feature_distance,
 )
 from perception.field.field_map import FieldMap, MapFeature
 from perception.geometry import FloatArray, project_points
@@ -419,13 +420,3 @@ def detect(
     if direction is None:
         return noisy, None
     return noisy, direction + float(rng.normal(0.0, model.direction_std_rad[kind]))
-
-
-def feature_distance(kind: str, points: FloatArray) -> float:
-    """:attr:`FieldFeature.distance_m` of a ``kind`` at ``points`` (P, 2): the distance (m)
-    from the robot to its nearest point (a segment's nearest point between its ends)."""
-    if kind not in SEGMENT_KINDS:
-        return float(np.hypot(*points[0]))
-    a, b = points
-    t = float(np.clip(-(a @ (b - a)) / float((b - a) @ (b - a)), 0.0, 1.0))
-    return float(np.hypot(*(a + t * (b - a))))

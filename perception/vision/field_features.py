@@ -249,6 +249,7 @@ class _Frame:
         self.horizon = horizon_rows(self.projection, columns)
         self.below = rows_from(self.horizon + config.horizon_margin_px, camera.height)
         self.clear = self.green | self.white  # what may lie beyond a line's end
+        self.white_below = self.white & self.below  # the line and mark candidates
 
     def covariances(self, pixels: FloatArray, points: FloatArray) -> FloatArray:
         """(N, 2, 2) covariance of the ground ``points`` (N, 2) m seen at ``pixels`` (N, 2)."""
@@ -318,7 +319,7 @@ def detect_field_features(
     cfg = FieldFeatureConfig() if config is None else config
     frame = _Frame(image, camera, state, cfg)
     runs = line_runs(
-        frame.white & frame.below,
+        frame.white_below,
         frame.green,
         frame.projection,
         line_width_m=cfg.line_width_m,
@@ -359,7 +360,8 @@ def detect_field_features(
     )
     segments = [s for s in segments if s.length >= cfg.min_line_m]
     features = [FieldFeature.trusted("line", s.ends, s.cov) for s in segments]
-    features += _field_edges(frame, runs.mask)
+    carpet = frame.green | runs.mask  # the carpet with its painted lines
+    features += _field_edges(frame, carpet)
     junctions = find_junctions(
         segments,
         angle_tol_rad=math.radians(cfg.junction_angle_deg),
@@ -376,7 +378,7 @@ def detect_field_features(
     if centre is not None:
         features += _circle_features(frame, centre, segments)
     features += _marks(frame, centre, segments)
-    features += _posts(frame, runs.mask)
+    features += _posts(frame, carpet)
     order = {kind: k for k, kind in enumerate(FEATURE_KINDS)}
     return tuple(sorted(features, key=lambda f: order[f.kind]))
 
@@ -424,7 +426,7 @@ def _marks(
     cfg, projection = frame.config, frame.projection
     out = []
     for blob in blobs(
-        frame.white & frame.below,
+        frame.white_below,
         frame.green,
         min_px=cfg.mark_px[0],
         max_px=cfg.mark_px[1],
@@ -450,12 +452,13 @@ def _marks(
     return out
 
 
-def _posts(frame: _Frame, lines: NDArray[np.bool_]) -> list[FieldFeature]:
-    """Goal posts: their feet (:func:`post_feet`) moved a radius along the view."""
+def _posts(frame: _Frame, carpet: NDArray[np.bool_]) -> list[FieldFeature]:
+    """Goal posts: their feet (:func:`post_feet`, the ``carpet`` (H, W) mask with its lines)
+    moved a radius along the view."""
     cfg, projection = frame.config, frame.projection
     feet = post_feet(
         frame.white,
-        frame.green | lines,
+        carpet,
         projection,
         diameter_m=cfg.post_diameter_m,
         width_ratio=cfg.post_width_ratio,
@@ -478,11 +481,11 @@ def _posts(frame: _Frame, lines: NDArray[np.bool_]) -> list[FieldFeature]:
     ]
 
 
-def _field_edges(frame: _Frame, lines: NDArray[np.bool_]) -> list[FieldFeature]:
-    """Straight stretches of the carpet's top edge in the image (line pixels count as carpet),
-    on the ground."""
+def _field_edges(frame: _Frame, carpet: NDArray[np.bool_]) -> list[FieldFeature]:
+    """Straight stretches of the top edge of the ``carpet`` (H, W) mask (line pixels count as
+    carpet) in the image, on the ground."""
     cfg = frame.config
-    top = carpet_top((frame.green | lines) & frame.below)
+    top = carpet_top(carpet & frame.below)
     columns = np.flatnonzero(np.isfinite(top))
     rows = top[columns]
     pixels = np.column_stack([columns, rows - 0.5]).astype(np.float64)  # the edge between rows

@@ -40,7 +40,7 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from perception.geometry import FloatArray, project_points
 from perception.types import CameraModel, CameraState
@@ -166,9 +166,10 @@ def pixels_of(points: FloatArray, camera: CameraModel, state: CameraState) -> Fl
     return GroundProjection(camera, state).pixels_of(points)
 
 
-def hsv_mask(hsv: NDArray[np.uint8], bounds: tuple[tuple[int, ...], tuple[int, ...]]) -> BoolImage:
-    """Pixels of ``hsv`` (H, W, 3) within the inclusive ``bounds`` ``(low, high)``."""
-    lo, hi = (np.array(b, dtype=np.uint8) for b in bounds)
+def hsv_mask(hsv: NDArray[np.uint8], bounds: tuple[ArrayLike, ArrayLike]) -> BoolImage:
+    """Pixels of ``hsv`` (H, W, 3; rows may be a window's, pixels contiguous) within the
+    inclusive ``bounds`` ``(low, high)`` (3,) each (uint8 arrays pass through uncopied)."""
+    lo, hi = (np.asarray(b, dtype=np.uint8) for b in bounds)
     return np.asarray(cv2.inRange(hsv, lo, hi), dtype=bool)
 
 

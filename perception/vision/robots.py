@@ -92,6 +92,7 @@ from perception.validation import check_in_interval, check_int, check_positive
 from perception.vision.colour_filter import HsvRange, check_hsv_range
 from perception.vision.field_pixels import (
     best_splits,
+    hsv_mask,
     row_runs,
     rows_from,
     run_pixels,
@@ -351,7 +352,8 @@ class RobotDetector:
         step = config.column_step_px
         self._sampled = slice(step // 2, None, step)  # the sampled columns, as a slice ...
         self._columns = np.arange(camera.width, dtype=np.intp)[self._sampled]  # ... and array
-        self._white = tuple(np.array(b, dtype=np.uint8) for b in config.white_hsv)
+        low, high = config.white_hsv
+        self._white = (np.array(low, dtype=np.uint8), np.array(high, dtype=np.uint8))
         (h_lo, _, v_lo), (h_hi, s_hi, v_hi) = config.green_hsv  # any saturation up to s_hi
         self._green_hued = (
             np.array([h_lo, 0, v_lo], np.uint8),
@@ -393,7 +395,7 @@ class RobotDetector:
         of the camera's size."""
         self._check_image(image)
         hsv = np.asarray(cv2.cvtColor(image, cv2.COLOR_RGB2HSV), dtype=np.uint8)
-        return _Colours(hsv, _in_range(hsv, self._white), _in_range(hsv, self._green_hued))
+        return _Colours(hsv, hsv_mask(hsv, self._white), hsv_mask(hsv, self._green_hued))
 
     def _boundary(self, colours: _Colours, state: CameraState) -> FieldBoundary:
         """:meth:`field_boundary` of the image of ``colours``."""
@@ -983,12 +985,6 @@ class RobotDetector:
         if not (np.isfinite(total).all() and total[0, 0] > 0 and np.linalg.det(total) > 0):
             return None
         return total
-
-
-def _in_range(hsv: NDArray[np.uint8], bounds: tuple[NDArray[np.uint8], ...]) -> NDArray[np.bool_]:
-    """Pixels (H, W) of ``hsv`` (H, W, 3; rows may be a window's, pixels contiguous) within the
-    inclusive ``bounds`` (low, high) (3,) each."""
-    return np.asarray(cv2.inRange(hsv, *bounds), dtype=bool)
 
 
 def _carpet_green(

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pybullet as p
@@ -503,19 +504,8 @@ class BulletWorld:
         lighting: Lighting,
     ) -> tuple[NDArray[np.uint8], NDArray[np.int32]]:
         """Tiny-renderer image (H, W, 3) uint8 RGB and (H, W) body-id labels (-1 = background)."""
-        _, _, rgba, depth, seg = p.getCameraImage(
-            width,
-            height,
-            viewMatrix=list(view),
-            projectionMatrix=list(projection),
-            renderer=p.ER_TINY_RENDERER,
-            shadow=0,
-            lightDirection=list(lighting.direction),
-            lightColor=list(lighting.colour),
-            lightAmbientCoeff=lighting.ambient,
-            lightDiffuseCoeff=lighting.diffuse,
-            lightSpecularCoeff=lighting.specular,
-            physicsClientId=self.client,
+        _, _, rgba, depth, seg = _tiny_render(
+            self.client, width, height, view, projection, lighting
         )
         rgb = np.ascontiguousarray(
             np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3]
@@ -535,30 +525,20 @@ class BulletWorld:
         middle pixel of a 3 x 3 render of the floor alone, looking straight down at it (kept
         for the last lighting asked for: an episode's frames share one)."""
         if self._floor_colour_for is None or self._floor_colour_for[0] != lighting:
+            assert self._floor is not None  # render() asks only for a painted floor
             if self._probe is None:
-                self._probe = _floor_probe(self._floor_rgba())
-            _, _, rgba, _, _ = p.getCameraImage(
+                self._probe = _floor_probe(self._floor.rgba)
+            _, _, rgba, _, _ = _tiny_render(
+                self._probe,
                 3,
                 3,
-                viewMatrix=p.computeViewMatrix([0, 0, 1], [0, 0, 0], [0, 1, 0]),
-                projectionMatrix=p.computeProjectionMatrixFOV(90.0, 1.0, 0.1, 10.0),
-                renderer=p.ER_TINY_RENDERER,
-                shadow=0,
-                lightDirection=list(lighting.direction),
-                lightColor=list(lighting.colour),
-                lightAmbientCoeff=lighting.ambient,
-                lightDiffuseCoeff=lighting.diffuse,
-                lightSpecularCoeff=lighting.specular,
-                physicsClientId=self._probe,
+                p.computeViewMatrix([0, 0, 1], [0, 0, 0], [0, 1, 0]),
+                p.computeProjectionMatrixFOV(90.0, 1.0, 0.1, 10.0),
+                lighting,
             )
             colour = np.asarray(rgba, dtype=np.uint8).reshape(3, 3, 4)[1, 1, :3].copy()
             self._floor_colour_for = (lighting, colour)
         return self._floor_colour_for[1]
-
-    def _floor_rgba(self) -> tuple[float, float, float, float]:
-        if self._floor is None:
-            raise RuntimeError("this world has no painted floor")
-        return self._floor.rgba
 
     def close(self) -> None:
         """Disconnect; safe to call more than once."""
@@ -709,3 +689,29 @@ class LinkSpec:
     offset: tuple[float, float, float]
     axis: tuple[float, float, float]
     parts: tuple[VisualPart, ...] = ()
+
+
+def _tiny_render(
+    client: int,
+    width: int,
+    height: int,
+    view: Sequence[float],
+    projection: Sequence[float],
+    lighting: Lighting,
+) -> Any:
+    """PyBullet's tiny renderer, without shadows, under ``lighting``: ``getCameraImage``'s
+    (width, height, rgba, depth, segmentation)."""
+    return p.getCameraImage(
+        width,
+        height,
+        viewMatrix=list(view),
+        projectionMatrix=list(projection),
+        renderer=p.ER_TINY_RENDERER,
+        shadow=0,
+        lightDirection=list(lighting.direction),
+        lightColor=list(lighting.colour),
+        lightAmbientCoeff=lighting.ambient,
+        lightDiffuseCoeff=lighting.diffuse,
+        lightSpecularCoeff=lighting.specular,
+        physicsClientId=client,
+    )

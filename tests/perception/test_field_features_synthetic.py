@@ -193,15 +193,6 @@ def test_row_runs_and_their_pixels_rebuild_the_mask() -> None:
     np.testing.assert_array_equal(rebuilt.reshape(mask.shape), mask)
 
 
-def test_best_splits_maximise_carpet_less_the_rest_below() -> None:
-    carpet = np.random.default_rng(2).random((40, 25)) < 0.6
-    carpet[20:, :10] = True
-    best, score = best_splits(carpet)
-    below = np.cumsum(np.where(carpet, 1, -1)[::-1], axis=0)[::-1]
-    np.testing.assert_array_equal(best, np.argmax(below, axis=0))
-    np.testing.assert_array_equal(score, below.max(axis=0))
-
-
 def test_transposed_is_the_contiguous_transpose_of_any_mask() -> None:
     rng = np.random.default_rng(0)
     for shape in [(0, 5), (1, 7), (7, 1), (240, 320), (33, 17)]:

@@ -186,7 +186,7 @@ def test_bad_meshes_rejected() -> None:
 
 
 def test_one_painted_floor_per_world() -> None:
-    world = BulletWorld(time_step_s=0.01)
+    world, other = BulletWorld(time_step_s=0.01), BulletWorld(time_step_s=0.01)
     try:
         slab = VisualPart(
             shape="box", size=(1.0, 1.0, 0.01), position=(0, 0, -0.01), rgba=LINE_RGBA
@@ -195,8 +195,7 @@ def test_one_painted_floor_per_world() -> None:
         with pytest.raises(ValueError, match="painted floor already"):
             world.add_painted_floor("again", (1.0, 1.0), LINE_RGBA, collision=[slab])
         with pytest.raises(ValueError, match="half_extents"):
-            BulletWorld(time_step_s=0.01).add_painted_floor(
-                "flat", (0.0, 1.0), LINE_RGBA, collision=[slab]
-            )
+            other.add_painted_floor("flat", (0.0, 1.0), LINE_RGBA, collision=[slab])
     finally:
         world.close()
+        other.close()
