@@ -3,18 +3,23 @@
     python -m agents.evaluate --policy scan --episodes 3 --out outputs/eval_scan
     python -m agents.evaluate --policy runs/ppo/model.zip --episodes 3 --out outputs/eval_ppo
     python -m agents.evaluate --env SPL/LookAround-v0 --policy look_at_stalest --set frontend=colour
+    python -m agents.evaluate --policy pretrained:active_vision --video --out outputs/eval_av
 
 Writes ``metrics.json`` (per episode and mean: return, mean SLAM position error, mean
-odometry-only error, mean pose NEES, landmark error, ``null`` where no landmark was mapped, mean
-wall-clock milliseconds per step) and ``trajectory.png`` (the first episode: true path green,
-SLAM orange, odometry grey, on the field).
+odometry-only error, mean pose NEES, landmark error, ``null`` where no landmark was mapped, the
+robot awareness (share of the robots within 3 m tracked within 0.3 m, ``null`` without robot
+tracks), mean wall-clock milliseconds per step) and ``trajectory.png`` (the first episode: true
+path green, SLAM orange, odometry grey, on the field); with ``--video`` also ``episode.mp4``, the
+first episode's ``env.render()`` frames at the control rate.
 
 ``--set key=value`` overrides the env config: a key is a dotted path
 (``sensors.camera.noise_std``), a top-level name (``control_dt_s``) or an alias of the env
 (``episode_s``, ``frontend``, ``backend``, ``body_behaviour``, ...; see
 :data:`spl_env.envs.active_vision.ACTIVE_VISION_ALIASES`). A model ``.zip`` saved by
 ``agents.train`` has its ``config.json`` beside it: its ``env_kwargs`` configure the env the
-model is evaluated on, and ``--set`` overrides them. The env must keep ``info_level="full"``:
+model is evaluated on, and ``--set`` overrides them; a shipped model (``pretrained:<name>``,
+:func:`pretrained_names`) has its training config beside it as ``<name>.json``, whose
+``env_id`` is the default ``--env``. The env must keep ``info_level="full"``:
 the metrics read perception and ground truth from ``info``.
 """
 
@@ -23,6 +28,7 @@ from __future__ import annotations
 import argparse
 import json
 from dataclasses import dataclass, field
+from importlib import resources
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -32,10 +38,16 @@ import numpy as np
 
 import spl_env  # noqa: F401  (registers the env ids)
 from agents.baselines import BASELINES
+from agents.head_options import OptionPolicy, pole_count
+from agents.video import write_video
 from perception.metrics import landmark_errors, pose_nees, position_error
 from spl_env.config import EnvConfig
 from spl_env.field import FieldDimensions
 from spl_env.rendering import ODOM_BGR, SLAM_BGR, TRUE_BGR, TopDownView
+from spl_env.tasks.robot_awareness import awareness_share
+
+AWARENESS_RADIUS_M = 3.0  # the robots issue's measure: robots this near ...
+AWARENESS_MATCH_M = 0.3  # ... tracked within this
 
 
 class Policy(Protocol):
@@ -51,7 +63,8 @@ class EpisodeRecord:
     """What one episode produced, step by step (T steps incl. the reset).
 
     ``step_seconds`` holds each step's wall-clock seconds (physics, rendering, sensors and
-    perception; 0 for the reset).
+    perception; 0 for the reset); ``awareness`` the robot awareness of each step with a robot
+    within 3 m (:func:`spl_env.tasks.robot_awareness.awareness_share`, envs with robot tracks).
     """
 
     episode_return: float = 0.0
@@ -60,6 +73,7 @@ class EpisodeRecord:
     odometry_poses: list[np.ndarray] = field(default_factory=list)
     pose_covs: list[np.ndarray] = field(default_factory=list)
     step_seconds: list[float] = field(default_factory=list)
+    awareness: list[float] = field(default_factory=list)
     frames: list[np.ndarray] = field(default_factory=list)
     final_info: dict[str, Any] = field(default_factory=dict)
 
@@ -70,21 +84,81 @@ class EpisodeRecord:
         self.odometry_poses.append(info["perception"]["odometry_pose"])
         self.pose_covs.append(info["perception"]["pose_cov"])
         self.step_seconds.append(step_s)
+        if "robots_tracked" in info["perception"]:
+            share = awareness_share(
+                info["ground_truth"]["robot_pose"][:2],
+                info["ground_truth"]["robots"][:, :2],
+                info["perception"]["robots"][info["perception"]["robots_tracked"]],
+                AWARENESS_RADIUS_M,
+                AWARENESS_MATCH_M,
+            )
+            if share is not None:
+                self.awareness.append(share)
         self.final_info = info
+
+
+PRETRAINED = "pretrained:"  # policy specs naming a shipped model: pretrained:<name>
+
+
+def pretrained_names() -> list[str]:
+    """Names of the models shipped in ``agents/pretrained`` (``<name>.zip`` beside
+    ``<name>.json``, the config it was trained with)."""
+    folder = Path(str(resources.files("agents") / "pretrained"))
+    return sorted(p.stem for p in folder.glob("*.zip") if p.with_suffix(".json").is_file())
+
+
+def model_files(spec: str) -> tuple[Path, Path | None] | None:
+    """The model ``.zip`` a policy spec names and the training config beside it (``None`` if
+    there is none), or ``None`` when ``spec`` names no model (a baseline).
+
+    ``pretrained:<name>`` is a shipped model with ``<name>.json``; a ``.zip`` path a model
+    saved by ``agents.train``, with its ``config.json`` in the same folder."""
+    if spec.startswith(PRETRAINED):
+        name = spec[len(PRETRAINED) :]
+        if name not in pretrained_names():
+            raise ValueError(
+                f"policy {spec!r}: no shipped model of that name; shipped: {pretrained_names()}"
+            )
+        folder = Path(str(resources.files("agents") / "pretrained"))
+        return folder / f"{name}.zip", folder / f"{name}.json"
+    if spec.endswith(".zip"):
+        if not Path(spec).is_file():
+            raise ValueError(f"policy {spec!r}: no such model file")
+        config = Path(spec).with_name("config.json")
+        return Path(spec), config if config.is_file() else None
+    return None
 
 
 def load_policy(spec: str, config: EnvConfig) -> Policy:
     """A baseline by name for an env built from ``config`` (the env's ``config_class``, e.g.
-    :class:`spl_env.envs.active_vision.ActiveVisionConfig`), or an SB3 PPO ``.zip``."""
+    :class:`spl_env.envs.active_vision.ActiveVisionConfig`), a shipped model
+    (``pretrained:<name>``) or an SB3 PPO ``.zip``."""
     if spec in BASELINES:
         return BASELINES[spec].from_config(config)
-    if spec.endswith(".zip") and Path(spec).exists():
-        from stable_baselines3 import PPO
+    files = model_files(spec)
+    if files is None:
+        raise ValueError(
+            f"policy must be one of {sorted(BASELINES)}, pretrained:<name> (shipped: "
+            f"{pretrained_names()}) or an existing .zip path, got {spec!r}"
+        )
+    from stable_baselines3 import PPO
 
-        return PPO.load(spec, device="cpu")
-    raise ValueError(
-        f"policy must be one of {sorted(BASELINES)} or an existing .zip path, got {spec!r}"
-    )
+    model = PPO.load(files[0], device="cpu")
+    if training_config(spec).get("head_options", False):
+        return OptionPolicy(model, config, pole_count(model.observation_space))
+    return model
+
+
+def training_config(spec: str) -> dict[str, Any]:
+    """The training config saved with the model ``spec`` names (``{}`` for a baseline or a
+    model saved without one)."""
+    files = model_files(spec)
+    if files is None or files[1] is None:
+        return {}
+    config = json.loads(files[1].read_text())
+    if not isinstance(config, dict) or not isinstance(config.get("env_kwargs"), dict):
+        raise ValueError(f"{files[1]} has no 'env_kwargs' object: not a training config")
+    return config
 
 
 def run_episode(env: gym.Env, policy: Policy, seed: int, frame_every: int = 0) -> EpisodeRecord:
@@ -136,6 +210,7 @@ def episode_metrics(record: EpisodeRecord) -> dict[str, float | None]:
         "mean_pose_nees": float(np.mean(nees)),
         "mean_landmark_error_m": float(np.mean(lm)) if len(lm) else None,
         "landmarks_mapped": len(lm),
+        "robot_awareness": float(np.mean(record.awareness)) if record.awareness else None,
         "mean_step_ms": 1000.0 * float(np.mean(record.step_seconds[1:])),
         "steps": len(record.true_poses) - 1,
     }
@@ -191,25 +266,26 @@ def parse_overrides(pairs: list[str]) -> dict[str, Any]:
 
 
 def env_kwargs_for(policy: str, overrides: dict[str, Any]) -> dict[str, Any]:
-    """Env kwargs to evaluate ``policy`` with: the ``env_kwargs`` of the ``config.json`` that
-    ``agents.train`` saved beside a model ``.zip`` (if there is one), updated by ``overrides``."""
-    if not policy.endswith(".zip"):
-        return dict(overrides)
-    config_path = Path(policy).with_name("config.json")
-    if not config_path.is_file():
-        return dict(overrides)
-    config = json.loads(config_path.read_text())
-    if not isinstance(config, dict) or not isinstance(config.get("env_kwargs"), dict):
-        raise ValueError(f"{config_path} has no 'env_kwargs' object: not a training config")
-    return {**config["env_kwargs"], **overrides}
+    """Env kwargs to evaluate ``policy`` with: the ``env_kwargs`` of the training config saved
+    with its model (if there is one; :func:`training_config`), updated by ``overrides``."""
+    return {**training_config(policy).get("env_kwargs", {}), **overrides}
 
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    parser.add_argument("--env", default="SPL/ActiveVision-v0")
-    parser.add_argument("--policy", default="scan", help=f"{sorted(BASELINES)} or a model .zip")
+    parser.add_argument(
+        "--env", default=None, help="env id (default: the model's, else SPL/ActiveVision-v0)"
+    )
+    parser.add_argument(
+        "--policy",
+        default="scan",
+        help=f"{sorted(BASELINES)}, pretrained:<name> ({pretrained_names()}) or a model .zip",
+    )
+    parser.add_argument(
+        "--video", action="store_true", help="also write the first episode as episode.mp4"
+    )
     parser.add_argument("--episodes", type=int, default=3)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path, default=Path("outputs/eval"))
@@ -224,12 +300,25 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     if args.episodes < 1:
         parser.error(f"--episodes must be >= 1, got {args.episodes}")
-    env = gym.make(args.env, **env_kwargs_for(args.policy, parse_overrides(args.set)))
+    env_id = args.env or training_config(args.policy).get("env_id", "SPL/ActiveVision-v0")
+    env = gym.make(
+        env_id,
+        render_mode="rgb_array" if args.video else None,
+        **env_kwargs_for(args.policy, parse_overrides(args.set)),
+    )
     policy = load_policy(args.policy, env.get_wrapper_attr("config"))
     args.out.mkdir(parents=True, exist_ok=True)
     per_episode = []
     for k in range(args.episodes):
-        record = run_episode(env, policy, seed=args.seed + k)
+        record = run_episode(
+            env, policy, seed=args.seed + k, frame_every=int(args.video and k == 0)
+        )
+        if record.frames:
+            write_video(
+                record.frames,
+                args.out / "episode.mp4",
+                fps=1.0 / env.get_wrapper_attr("config").control_dt_s,
+            )
         per_episode.append(episode_metrics(record))
         print(f"episode {k}: {json.dumps(per_episode[-1])}")
         if k == 0:
@@ -239,7 +328,7 @@ def main(argv: list[str] | None = None) -> None:
             )
     env.close()
     result = {
-        "env": args.env,
+        "env": env_id,
         "policy": args.policy,
         "episodes": per_episode,
         "mean": summarise(per_episode),

@@ -23,6 +23,7 @@ import numpy as np
 from agents.baselines import ScriptedPolicy
 from perception.geometry import FloatArray
 from spl_env.config import EnvConfig
+from spl_env.observations.base import unsquash
 from spl_env.observations.poles import RANGE_SCALE_M
 from spl_env.robots.nao import in_kick_zone
 from spl_env.tasks.soccer import goal_centre
@@ -42,12 +43,6 @@ def believed_pose(obs: dict[str, np.ndarray], carpet_size_m: tuple[float, float]
     return np.array(
         [p[0] * carpet_size_m[0] / 2, p[1] * carpet_size_m[1] / 2, math.atan2(p[3], p[2])]
     )
-
-
-def unsquash(q: FloatArray | float, scale: float) -> FloatArray:
-    """The inverse of :func:`spl_env.observations.base.squash`: ``scale q / (1 - q)``."""
-    q = np.asarray(q, dtype=np.float64)
-    return scale * q / np.maximum(1.0 - q, 1e-6)
 
 
 def relative_point(pose: FloatArray, cos_b: float, sin_b: float, range_m: float) -> FloatArray:

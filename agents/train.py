@@ -6,13 +6,22 @@
 
 Hyper-parameters come from ``agents/configs/<env id with / as _>.json`` (plain values) and can be
 changed with ``--set`` (env config keys as in ``agents.evaluate``) or by editing a copy passed
-with ``--config``. Saves ``model.zip`` and the resolved ``config.json`` to ``--out``.
+with ``--config``. A config may set ``n_envs`` (default 1): that many envs step in parallel
+processes (SB3's ``SubprocVecEnv``); and ``warm_start``
+(:class:`agents.imitation.WarmStartConfig` fields): the policy first imitates a scripted one,
+which plays seeds ``10 000 (seed + 1) + k``; or ``head_options: true``: the policy picks what
+to look at (:mod:`agents.head_options`) instead of head angles. Training envs run with
+``info_level="light"`` (training reads only rewards). Saves ``model.zip``, the resolved
+``config.json`` (with the warm start's losses per epoch) and each env's episode returns
+(``monitor/*.monitor.csv``, SB3's ``Monitor``; :mod:`agents.learning_curves` plots them) to
+``--out``.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+from functools import partial
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -21,6 +30,8 @@ import gymnasium as gym
 
 import spl_env  # noqa: F401  (registers the env ids)
 from agents.evaluate import parse_overrides
+from agents.head_options import HeadOptions
+from agents.imitation import WarmStartConfig, imitate, record_teacher
 
 
 def default_config_path(env_id: str) -> Path:
@@ -30,12 +41,31 @@ def default_config_path(env_id: str) -> Path:
 
 
 def load_config(path: Path) -> dict[str, Any]:
-    """Read a training config (JSON with ``policy``, ``env_kwargs`` and ``ppo`` keys)."""
+    """Read a training config (JSON with ``policy``, ``env_kwargs`` and ``ppo`` keys, optional
+    ``n_envs``, ``head_options`` and ``warm_start``)."""
     config = json.loads(path.read_text())
     missing = {"policy", "env_kwargs", "ppo"} - set(config)
     if missing:
         raise ValueError(f"training config {path} lacks keys {sorted(missing)}")
+    if not isinstance(config.get("head_options", False), bool):
+        raise ValueError(f"training config {path}: head_options must be true or false")
+    n_envs = config.get("n_envs", 1)
+    if isinstance(n_envs, bool) or not isinstance(n_envs, int) or n_envs < 1:
+        raise ValueError(f"training config {path}: n_envs must be an int >= 1, got {n_envs!r}")
     return config
+
+
+TEACHER_SEED0 = 10_000  # a warm start's teacher plays seeds 10 000 (seed + 1) + k
+
+
+def make_training_env(
+    env_id: str, env_kwargs: dict[str, Any], head_options: bool = False
+) -> gym.Env:
+    """One training env: ``env_kwargs`` with ``info_level="light"`` unless they say otherwise,
+    wrapped in :class:`agents.head_options.HeadOptions` with ``head_options`` (a module-level
+    function, so that ``SubprocVecEnv`` workers import ``spl_env`` with it)."""
+    env = gym.make(env_id, **{"info_level": "light", **env_kwargs})
+    return HeadOptions(env) if head_options else env
 
 
 def train(
@@ -48,11 +78,27 @@ def train(
     tensorboard: Path | None = None,
 ) -> Path:
     """Train PPO on ``env_id``; returns the saved model's path."""
+    import torch
     from stable_baselines3 import PPO
+    from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
     if timesteps < 1:
         raise ValueError(f"timesteps must be >= 1, got {timesteps}")
-    env = gym.make(env_id, **config["env_kwargs"])
+    # the envs take the cores: a second torch thread only spins against them (a 2-core
+    # machine ran 3x slower with torch's default threads beside busy env workers)
+    torch.set_num_threads(1)
+    n_envs = config.get("n_envs", 1)
+    head_options = config.get("head_options", False)
+    if head_options and "warm_start" in config:
+        raise ValueError("a training config takes head_options or warm_start, not both")
+    env = make_vec_env(
+        partial(make_training_env, env_id, config["env_kwargs"], head_options),
+        n_envs=n_envs,
+        seed=seed,
+        monitor_dir=str(out / "monitor"),
+        vec_env_cls=SubprocVecEnv if n_envs > 1 else DummyVecEnv,
+    )
     model = PPO(
         config["policy"],
         env,
@@ -62,10 +108,16 @@ def train(
         tensorboard_log=str(tensorboard) if tensorboard else None,
         **config["ppo"],
     )
+    resolved: dict[str, Any] = {**config, "env_id": env_id, "timesteps": timesteps, "seed": seed}
+    if "warm_start" in config:
+        warm = WarmStartConfig(**config["warm_start"])
+        teacher_env = make_training_env(env_id, config["env_kwargs"])
+        demos = record_teacher(teacher_env, warm, model.gamma, seed=TEACHER_SEED0 * (seed + 1))
+        teacher_env.close()
+        resolved["warm_start_losses"] = imitate(model, demos, warm, seed)
     model.learn(total_timesteps=timesteps, progress_bar=progress_bar)
     out.mkdir(parents=True, exist_ok=True)
     model.save(out / "model.zip")
-    resolved = {**config, "env_id": env_id, "timesteps": timesteps, "seed": seed}
     (out / "config.json").write_text(json.dumps(resolved, indent=2))
     env.close()
     return out / "model.zip"

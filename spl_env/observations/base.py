@@ -20,6 +20,12 @@ def squash(q: FloatArray | float, scale: float) -> FloatArray:
     return q / (q + scale)
 
 
+def unsquash(q: FloatArray | float, scale: float) -> FloatArray:
+    """The inverse of :func:`squash`: ``scale q / (1 - q)``."""
+    q = np.asarray(q, dtype=np.float64)
+    return scale * q / np.maximum(1.0 - q, 1e-6)
+
+
 def box(low: float, high: float, size: int) -> spaces.Box:
     """A 1-D float32 box of ``size`` entries in [low, high]."""
     return spaces.Box(low=low, high=high, shape=(size,), dtype=np.float32)

@@ -24,7 +24,7 @@ from spl_env.observations.body import EpisodeClockEncoder, HeadEncoder, SonarEnc
 from spl_env.observations.poles import PoleMapEncoder
 from spl_env.observations.self_pose import SelfPoseEncoder
 from spl_env.robots.nao import NaoCommand, head_target
-from spl_env.tasks.base import Task, TaskConfig
+from spl_env.tasks.base import Task, TaskConfig, TaskContext
 from spl_env.world_state import WorldState
 
 
@@ -34,10 +34,11 @@ class HeadControlTaskConfig(TaskConfig):
 
     error_weight: float = 1.0  # reward per metre of true position error, per step
     uncertainty_weight: float = 0.5  # reward per metre of position std, per step
+    information_weight: float = 0.0  # reward per metre the position std fell this step
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        for name in ("error_weight", "uncertainty_weight"):
+        for name in ("error_weight", "uncertainty_weight", "information_weight"):
             check_positive(type(self).__name__, name, getattr(self, name), allow_zero=True)
 
 
@@ -45,6 +46,10 @@ class HeadControlTask(Task):
     """The policy moves the head; :meth:`walk` (a subclass's) moves the body."""
 
     config: HeadControlTaskConfig
+
+    def __init__(self, config: HeadControlTaskConfig, context: TaskContext) -> None:
+        super().__init__(config, context)
+        self._previous_std: float | None = None
 
     @property
     def action_space(self) -> spaces.Box:
@@ -73,11 +78,16 @@ class HeadControlTask(Task):
 
     def reward_terms(self, state: WorldState, output: PerceptionOutput) -> dict[str, float]:
         """``position_error``: -error_weight x the true position error (m); ``uncertainty``:
-        -uncertainty_weight x the believed position std sqrt(trace Σ_xy) (m)."""
+        -uncertainty_weight x the believed position std sqrt(trace Σ_xy) (m); ``information``:
+        information_weight x how much that std fell since the previous step (0 at time 0): a
+        potential-based shaping term that pays for this step's sightings at once."""
         slam = output.get_as(SELF_POSE, SlamEstimate)
         error = float(np.hypot(*(state.robot_pose[:2] - slam.pose[:2])))
         std = float(math.sqrt(max(np.trace(slam.pose_cov[:2, :2]), 0.0)))
+        previous = std if output.time_s <= 0.0 or self._previous_std is None else self._previous_std
+        self._previous_std = std
         return {
             "position_error": -self.config.error_weight * error,
             "uncertainty": -self.config.uncertainty_weight * std,
+            "information": self.config.information_weight * (previous - std),
         }

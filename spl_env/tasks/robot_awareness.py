@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from perception.geometry import FloatArray
 from perception.representations import ROBOT_TRACKS, PerceptionOutput
 from perception.types import RobotTrack
 from perception.validation import check_int, check_positive
@@ -33,20 +34,27 @@ class RobotAwarenessTaskConfig(ActiveVisionTaskConfig):
         check_positive(owner, "awareness_weight", self.awareness_weight, allow_zero=True)
 
 
+def awareness_share(
+    position: FloatArray, robots: FloatArray, tracked: FloatArray, radius_m: float, match_m: float
+) -> float | None:
+    """Share of the other robots at ``robots`` (K, 2) within ``radius_m`` of ``position`` (2,)
+    that a tracked position of ``tracked`` (M, 2) lies within ``match_m`` of (field frame, m);
+    None when no robot is that near."""
+    near = robots[np.hypot(*(robots - position).T) < radius_m]
+    if len(near) == 0:
+        return None
+    if len(tracked) == 0:
+        return 0.0
+    gaps = np.hypot(*(near[:, None, :] - tracked[None, :, :]).transpose(2, 0, 1))
+    return float(np.mean(gaps.min(axis=1) <= match_m))
+
+
 def tracked_share(
     state: WorldState, tracks: tuple[RobotTrack, ...], radius_m: float, match_m: float
 ) -> float | None:
-    """Share of the other robots within ``radius_m`` of ours that a confirmed track lies within
-    ``match_m`` of (true positions); None when no robot is that near."""
-    robots = state.robots[:, :2]
-    near = robots[np.hypot(*(robots - state.robot_pose[:2]).T) < radius_m]
-    if len(near) == 0:
-        return None
+    """:func:`awareness_share` of the true robots of ``state`` and the confirmed ``tracks``."""
     positions = np.array([t.state[:2] for t in tracks if t.confirmed]).reshape(-1, 2)
-    if len(positions) == 0:
-        return 0.0
-    gaps = np.hypot(*(near[:, None, :] - positions[None, :, :]).transpose(2, 0, 1))
-    return float(np.mean(gaps.min(axis=1) <= match_m))
+    return awareness_share(state.robot_pose[:2], state.robots[:, :2], positions, radius_m, match_m)
 
 
 class RobotAwarenessTask(ActiveVisionTask):

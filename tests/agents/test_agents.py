@@ -167,6 +167,9 @@ def test_evaluate_uses_the_env_kwargs_saved_beside_the_model(
 
 def test_env_kwargs_for_merges_the_saved_config_under_the_overrides(tmp_path: Path) -> None:
     model = str(tmp_path / "model.zip")
+    with pytest.raises(ValueError, match="no such model file"):
+        env_kwargs_for(model, {})
+    (tmp_path / "model.zip").write_bytes(b"")  # only its config beside it is read
     assert env_kwargs_for(model, {"episode_s": 3}) == {"episode_s": 3}  # no config.json beside it
     env_kwargs = {"episode_s": 2.0, "body_behaviour": "square"}
     config = {"policy": "MultiInputPolicy", "ppo": {}, "env_kwargs": env_kwargs}

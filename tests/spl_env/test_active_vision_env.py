@@ -151,8 +151,34 @@ def test_info_contract(env: gym.Env) -> None:
     for part in ("perception", "ground_truth"):
         for key, value in info[part].items():
             assert np.shape(first[part][key]) == np.shape(value), key
-    terms = {"position_error", "uncertainty"} | ({"robot_awareness"} if tracks_robots else set())
+    terms = {"position_error", "uncertainty", "information"}
+    terms |= {"robot_awareness"} if tracks_robots else set()
     assert set(info["reward_terms"]) == terms
+
+
+def test_information_term_pays_for_the_fall_of_the_position_std() -> None:
+    env = gym.make(
+        "SPL/ActiveVision-v0",
+        camera_mode="geometric",
+        frontend="colour",
+        episode_s=10.0,
+        **{"task.information_weight": 4.0},
+    )
+    _, info = env.reset(seed=5)
+    assert info["reward_terms"]["information"] == 0.0  # no previous step at time 0
+    std = float(np.sqrt(np.trace(info["perception"]["pose_cov"][:2, :2])))
+    fell = rose = False
+    for k in range(100):  # a head sweep: poles come into view and leave it
+        info = env.step(np.array([np.sin(k / 4), 0.0], dtype=np.float32))[4]
+        new_std = float(np.sqrt(np.trace(info["perception"]["pose_cov"][:2, :2])))
+        assert info["reward_terms"]["information"] == pytest.approx(4.0 * (std - new_std))
+        assert info["reward_terms"]["uncertainty"] == pytest.approx(-0.5 * new_std)
+        fell, rose = fell or new_std < std, rose or new_std > std
+        std = new_std
+    assert fell and rose  # sightings shrink the std, walking without them grows it
+    _, info = env.reset(seed=6)
+    assert info["reward_terms"]["information"] == 0.0  # a new episode forgets the old std
+    env.close()
 
 
 def test_truncates_after_episode_length(env: gym.Env) -> None:

@@ -13,13 +13,13 @@ import pytest
 from gymnasium.utils.env_checker import check_env as gym_check_env
 
 import spl_env
-from agents.soccer_baselines import believed_ball, believed_pose, unsquash
+from agents.soccer_baselines import believed_ball, believed_pose
 from perception.field.dimensions import FieldDimensions
 from perception.representations import BALL, SELF_POSE, PerceptionOutput
 from perception.types import BallEstimate, SensorFrame, SlamEstimate
 from spl_env.envs.core import SplEnv
 from spl_env.observations.ball import BallEncoder
-from spl_env.observations.base import EncoderInput
+from spl_env.observations.base import EncoderInput, unsquash
 from spl_env.observations.poles import RANGE_SCALE_M
 from spl_env.observations.self_pose import SelfPoseEncoder
 from spl_env.robots.nao import NaoRobot, RobotConfig, kick_intent, walk_target
