@@ -24,12 +24,12 @@ import numpy as np
 import numpy.typing as npt
 
 from agents.information_gain import information_gain, range_bearing_jacobian
-from perception.geometry import FloatArray
+from perception.geometry import FloatArray, wrap_angle
 from spl_env.config import EnvConfig
 from spl_env.observations.base import unsquash
 from spl_env.observations.poles import RANGE_SCALE_M, SINCE_SEEN_SCALE_S
 from spl_env.observations.self_pose import STD_SCALE_M, STD_SCALE_RAD
-from spl_env.robots.nao import RobotConfig, head_action
+from spl_env.robots.nao import RobotConfig, head_action, head_target
 
 
 class ScriptedPolicy(ABC):
@@ -156,38 +156,41 @@ class GreedyInformation(HeadScan):
         super().__init__(robot, control_dt_s)
         self.half_fov_rad = half_fov_rad
         limit = robot.head_yaw_limit_rad
-        grid = self.yaw_step_rad * np.arange(1, int(limit / self.yaw_step_rad) + 1)
-        self.candidates = np.unique(np.concatenate([-grid, [0.0], grid, [-limit, limit]]))
+        half_count = round(limit / self.yaw_step_rad)  # an even grid through 0 and both limits
+        self.candidates = np.linspace(-limit, limit, 2 * half_count + 1)
         self.explore_steps = round(self.explore_period_s / control_dt_s)
         self.sweep_steps = round(self.period_s / control_dt_s)
         self.reset()
 
     @classmethod
     def from_config(cls, config: EnvConfig) -> GreedyInformation:
-        model = config.sensors.camera.model
-        return cls(config.robot, config.control_dt_s, math.atan2(model.width / 2, model.fx))
+        hfov_deg = config.sensors.camera.model.hfov_deg
+        return cls(config.robot, config.control_dt_s, math.radians(hfov_deg) / 2)
 
     def reset(self) -> None:
         super().reset()
         self._target_yaw = 0.0
         self._held_s = math.inf
         self._cov: FloatArray | None = None
-        self._step = 0
 
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
-        step, self._step = self._step, self._step + 1
+        step = round(self.t_s / self.control_dt_s)
         if "landmarks_mask" not in obs or not np.any(obs["landmarks_mask"] > 0.5):
             return super().act(obs)
         jacobians, noise, bearings = self.pole_sightings(obs)
         self._cov = self.track_covariance(obs, jacobians, noise)
         exploring = not np.all(obs["landmarks_mask"] > 0.5)
         if exploring and step % self.explore_steps < self.sweep_steps:
+            self._held_s = math.inf  # plan afresh once the sweep ends
             return super().act(obs)
         if self._held_s >= self.hold_s:
             views = self.pole_scores(jacobians[0], noise[0], bearings) + self.robot_scores(obs)
             # the mean over neighbouring yaws peaks mid-plateau: what is in view gets centred
-            scores = np.convolve(views, np.ones(self.centring) / self.centring, mode="same")
-            head_yaw = float(obs["head_angles"][0]) * self.robot.head_yaw_limit_rad
+            kernel = np.ones(self.centring)
+            scores = np.convolve(views, kernel, mode="same") / np.convolve(
+                np.ones_like(views), kernel, mode="same"
+            )  # the grid's ends averaged over the neighbours they have
+            head_yaw = float(head_target(self.robot, obs["head_angles"])[0])
             scores -= self.turn_cost * np.abs(self.candidates - head_yaw)
             self._target_yaw = float(self.candidates[int(np.argmax(scores))])
             self._held_s = 0.0
@@ -247,7 +250,7 @@ class GreedyInformation(HeadScan):
 
     def in_view(self, bearings: FloatArray) -> npt.NDArray[np.bool_]:
         """(C, N) whether each of N bearings (rad) lies inside the image at each candidate yaw."""
-        offset = np.angle(np.exp(1j * (bearings[None, :] - self.candidates[:, None])))
+        offset = wrap_angle(bearings[None, :] - self.candidates[:, None])
         return np.abs(offset) <= self.half_fov_rad - self.view_margin_rad
 
     def pole_scores(

@@ -25,6 +25,7 @@ from spl_env.navigation import (
     HybridNavigator,
     braitenberg_action,
 )
+from spl_env.observations.base import unsquash
 from spl_env.observations.body import SONAR_SCALE_M
 
 
@@ -40,7 +41,7 @@ def sonar_ranges(obs: dict[str, np.ndarray]) -> FloatArray:
     q = np.asarray(obs["sonar_ring"], dtype=np.float64)
     ranges = np.full(len(q), np.nan)
     echo = q < 1.0
-    ranges[echo] = SONAR_SCALE_M * q[echo] / (1.0 - q[echo])
+    ranges[echo] = unsquash(q[echo], SONAR_SCALE_M)
     return ranges
 
 

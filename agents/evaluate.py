@@ -35,6 +35,7 @@ from typing import Any, Protocol
 import cv2
 import gymnasium as gym
 import numpy as np
+from gymnasium import spaces
 
 import spl_env  # noqa: F401  (registers the env ids)
 from agents.baselines import BASELINES
@@ -44,10 +45,9 @@ from perception.metrics import landmark_errors, pose_nees, position_error
 from spl_env.config import EnvConfig
 from spl_env.field import FieldDimensions
 from spl_env.rendering import ODOM_BGR, SLAM_BGR, TRUE_BGR, TopDownView
-from spl_env.tasks.robot_awareness import awareness_share
+from spl_env.tasks.robot_awareness import RobotAwarenessTaskConfig, awareness_share
 
-AWARENESS_RADIUS_M = 3.0  # the robots issue's measure: robots this near ...
-AWARENESS_MATCH_M = 0.3  # ... tracked within this
+AWARENESS = RobotAwarenessTaskConfig()  # the robots issue's measure: its radius and match
 
 
 class Policy(Protocol):
@@ -89,8 +89,8 @@ class EpisodeRecord:
                 info["ground_truth"]["robot_pose"][:2],
                 info["ground_truth"]["robots"][:, :2],
                 info["perception"]["robots"][info["perception"]["robots_tracked"]],
-                AWARENESS_RADIUS_M,
-                AWARENESS_MATCH_M,
+                AWARENESS.awareness_radius_m,
+                AWARENESS.awareness_match_m,
             )
             if share is not None:
                 self.awareness.append(share)
@@ -144,7 +144,7 @@ def load_policy(spec: str, config: EnvConfig) -> Policy:
     from stable_baselines3 import PPO
 
     model = PPO.load(files[0], device="cpu")
-    if training_config(spec).get("head_options", False):
+    if isinstance(model.action_space, spaces.Discrete):  # trained on HeadOptions (ours, the Zoo's)
         return OptionPolicy(model, config, pole_count(model.observation_space))
     return model
 
@@ -300,7 +300,11 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     if args.episodes < 1:
         parser.error(f"--episodes must be >= 1, got {args.episodes}")
-    env_id = args.env or training_config(args.policy).get("env_id", "SPL/ActiveVision-v0")
+    try:
+        saved = training_config(args.policy)
+    except ValueError as error:
+        parser.error(str(error))
+    env_id = args.env or saved.get("env_id", "SPL/ActiveVision-v0")
     env = gym.make(
         env_id,
         render_mode="rgb_array" if args.video else None,

@@ -121,6 +121,11 @@ class OptionPolicy:
         deterministic: bool = True,
     ) -> tuple[np.ndarray, None]:
         """SB3-style: the head action (2,) of the option the model picks for ``obs``."""
+        batched = {k: np.shape(v) for k, v in obs.items() if np.ndim(v) > 1}
+        if batched:
+            raise ValueError(
+                f"obs must be one observation of the plain env (1-D entries), got shapes {batched}"
+            )
         if episode_start is not None and np.any(episode_start):
             self.primitives.reset()
         option, _ = self.model.predict(obs, deterministic=deterministic)

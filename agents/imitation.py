@@ -40,12 +40,15 @@ class WarmStartConfig:
 
 @dataclass(frozen=True)
 class Demonstrations:
-    """N recorded steps: observations by key (N, ...), the teacher's actions (N, A) and the
-    discounted return from each step on (N,)."""
+    """N recorded steps: observations by key (N, ...), the teacher's actions (N, A), the
+    discounted return from each step on (N,) and whether that return is a value target (N,):
+    not within 3 / (1 - γ) steps of a time limit, where the rewards it would sum go on past
+    the episode's end (PPO bootstraps there; a recorded return cannot)."""
 
     observations: dict[str, np.ndarray]
     actions: np.ndarray
     returns: np.ndarray
+    value_mask: np.ndarray
 
 
 def record_teacher(
@@ -56,6 +59,8 @@ def record_teacher(
     observations: list[dict[str, np.ndarray]] = []
     actions: list[np.ndarray] = []
     returns: list[np.ndarray] = []
+    masks: list[np.ndarray] = []
+    horizon = round(3.0 / (1.0 - gamma)) if gamma < 1.0 else 0
     for episode in range(config.episodes):
         obs, _ = env.reset(seed=seed + episode)
         rewards: list[float] = []
@@ -68,10 +73,15 @@ def record_teacher(
             rewards.append(float(reward))
             done, first = terminated or truncated, False
         returns.append(discounted_returns(np.array(rewards), gamma))
+        mask = np.ones(len(rewards), dtype=bool)
+        if truncated and not terminated:
+            mask[max(len(rewards) - horizon, 0) :] = False
+        masks.append(mask)
     return Demonstrations(
         observations={k: np.stack([o[k] for o in observations]) for k in observations[0]},
         actions=np.stack(actions).astype(np.float32),
         returns=np.concatenate(returns).astype(np.float32),
+        value_mask=np.concatenate(masks),
     )
 
 
@@ -89,7 +99,10 @@ def imitate(model: Any, demos: Demonstrations, config: WarmStartConfig, seed: in
     """Fit ``model``'s (an SB3 PPO with a Gaussian policy) action mean to the teacher's actions
     and its value to the returns; returns the mean loss of each epoch."""
     import torch
+    from gymnasium import spaces
 
+    if not isinstance(model.action_space, spaces.Box):
+        raise TypeError(f"imitate needs a model with a Box action space, got {model.action_space}")
     policy = model.policy
     optimiser = torch.optim.Adam(policy.parameters(), lr=config.learning_rate)
     n = len(demos.actions)
@@ -97,6 +110,7 @@ def imitate(model: Any, demos: Demonstrations, config: WarmStartConfig, seed: in
     obs_tensors = {k: torch.as_tensor(v) for k, v in demos.observations.items()}
     actions = torch.as_tensor(demos.actions)
     returns = torch.as_tensor(demos.returns)
+    value_mask = torch.as_tensor(demos.value_mask, dtype=torch.float32)
     losses: list[float] = []
     policy.set_training_mode(True)
     for _ in range(config.epochs):
@@ -107,9 +121,11 @@ def imitate(model: Any, demos: Demonstrations, config: WarmStartConfig, seed: in
             obs = {k: v[batch] for k, v in obs_tensors.items()}
             mean = policy.get_distribution(obs).distribution.mean
             value = policy.predict_values(obs).squeeze(-1)
-            loss = torch.mean((mean - actions[batch]) ** 2) + config.value_weight * torch.mean(
-                (value - returns[batch]) ** 2
+            weights = value_mask[batch]
+            value_loss = torch.sum(weights * (value - returns[batch]) ** 2) / torch.clamp(
+                torch.sum(weights), min=1.0
             )
+            loss = torch.mean((mean - actions[batch]) ** 2) + config.value_weight * value_loss
             optimiser.zero_grad()
             loss.backward()
             optimiser.step()

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import json
 from pathlib import Path
 
 import numpy as np
@@ -20,15 +21,20 @@ import numpy as np
 
 def read_monitor(run: Path) -> tuple[np.ndarray, np.ndarray]:
     """Steps taken (E,) when each of the run's E episodes ended, and their returns (E,), from
-    all ``run/monitor/*.monitor.csv`` files (SB3's ``Monitor``: a JSON line, then ``r,l,t``)."""
+    all ``run/monitor/*.monitor.csv`` files (SB3's ``Monitor``: a JSON line with ``t_start``,
+    then ``r,l,t`` rows, t in seconds since ``t_start``), ordered by when they ended."""
     files = sorted((run / "monitor").glob("*.monitor.csv"))
     if not files:
         raise ValueError(f"run {str(run)!r} has no monitor/*.monitor.csv files")
     rows: list[tuple[float, float, float]] = []
     for path in files:
         with path.open() as handle:
-            next(handle)  # the JSON header line
-            rows += [(float(r["t"]), float(r["l"]), float(r["r"])) for r in csv.DictReader(handle)]
+            header = json.loads(next(handle).lstrip("#"))  # when this env started (epoch s)
+            start = float(header["t_start"])
+            rows += [
+                (start + float(r["t"]), float(r["l"]), float(r["r"]))
+                for r in csv.DictReader(handle)
+            ]
     if not rows:
         raise ValueError(f"run {str(run)!r} has no finished episode yet")
     rows.sort()

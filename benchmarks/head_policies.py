@@ -10,9 +10,10 @@ mode is ``rendered`` (the CNN front end on rendered frames, the env's default) o
 (the colour filter's fitted emulation, where the policies train). Per policy: the mean over
 episodes of each episode's mean position error, pose NEES, robot awareness (share of the robots
 within 3 m tracked within 0.3 m) and return, each with a 95 % t-interval over episodes. Models
-whose file names share a folder stem (``runs/av_seed<k>``) form a group ``--group NAME=PREFIX``
-whose episodes pool across training seeds (the interval then spans seeds and episodes), with
-each seed's mean beside it.
+of one recipe trained with different seeds (folders ``runs/av_seed<k>``) form a group
+(``--group NAME=runs/av_seed``: the models whose folder name starts so): its interval is the
+t-interval over the S training seeds' means (S - 1 degrees of freedom; the training seed is the
+larger source of spread, and all run the same evaluation seeds).
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ import spl_env  # noqa: F401  (registers the env ids)
 from agents.evaluate import episode_metrics, load_policy, run_episode
 
 METRICS = ("mean_position_error_m", "mean_pose_nees", "robot_awareness", "return")
-MODES = {
+MODES: dict[str, dict[str, Any]] = {
     "rendered": {},
     "geometric": {"camera_mode": "geometric", "frontend": "colour"},
 }
@@ -46,12 +47,15 @@ def interval(values: list[float]) -> dict[str, float | int | None]:
     return {"mean": mean, "low": mean - half, "high": mean + half, "n": len(x)}
 
 
+def seed_values(episodes: list[dict[str, Any]], key: str) -> list[float]:
+    """The values of ``key`` in the episodes that have it."""
+    return [e[key] for e in episodes if e[key] is not None]
+
+
 def summary(episodes: list[dict[str, Any]]) -> dict[str, Any]:
     """Each metric's interval over the episodes that have it."""
     return {
-        key: interval([e[key] for e in episodes if e[key] is not None])
-        for key in METRICS
-        if any(e[key] is not None for e in episodes)
+        key: interval(seed_values(episodes, key)) for key in METRICS if seed_values(episodes, key)
     }
 
 
@@ -88,15 +92,19 @@ def main() -> None:
     env.close()
     groups = {}
     for pair in args.group:
-        name, _, prefix = pair.partition("=")
-        members = [s for s in per_policy if s.startswith(prefix)]
-        pooled = [e for s in members for e in per_policy[s]]
+        name, sep, folder = pair.partition("=")
+        if not (sep and name and folder):
+            parser.error(f"--group takes NAME=FOLDER_PREFIX, got {pair!r}")
+        members = [s for s in per_policy if Path(s).parent.name.startswith(Path(folder).name)]
+        if len(members) < 2:
+            parser.error(f"--group {pair!r} matches {len(members)} policies; it needs >= 2")
         groups[name] = {
             "members": members,
-            **summary(pooled),
-            "per_seed_mean_position_error_m": [
-                float(np.mean([e["mean_position_error_m"] for e in per_policy[s]])) for s in members
-            ],
+            **{
+                key: interval([float(np.mean(seed_values(per_policy[s], key))) for s in members])
+                for key in METRICS
+                if all(seed_values(per_policy[s], key) for s in members)
+            },
         }
         print(json.dumps({"group": name, **groups[name]}), flush=True)
     out = args.out or Path(f"benchmarks/results/head_policies_{args.mode}.json")

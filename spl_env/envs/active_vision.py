@@ -72,7 +72,9 @@ class ActiveVisionEnv(SplEnv):
     **Reward** per step, each term in ``info["reward_terms"]``:
 
     - ``position_error``: ``-error_weight * |p_true - p_slam|`` (m), the true localisation error;
-    - ``uncertainty``: ``-uncertainty_weight * sqrt(trace Σ_xy)`` (m), the believed position std.
+    - ``uncertainty``: ``-uncertainty_weight * sqrt(trace Σ_xy)`` (m), the believed position std;
+    - ``information``: ``information_weight`` (default 0) times how much that std fell since the
+      previous step (0 at time 0): pays for a step's sightings at once.
 
     **Episode**: truncated after ``episode_s`` (60 s, 600 steps); never terminated. The body's
     scripted walk steers on the true pose (it is scenery, not the policy's concern).

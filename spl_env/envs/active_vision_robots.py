@@ -57,9 +57,9 @@ class ActiveVisionRobotsEnv(SplEnv):
     ``robots_mask``         (K,)    1 where a track fills the row
     ======================  ======  =========================================================
 
-    **Reward**: v0's ``position_error`` and ``uncertainty`` plus ``robot_awareness``:
-    ``-0.5 * (1 - share)``, ``share`` the share of the robots within 3 m tracked within 0.3 m
-    (0 when no robot is that near); each term in ``info["reward_terms"]``.
+    **Reward**: v0's ``position_error``, ``uncertainty`` and ``information`` plus
+    ``robot_awareness``: ``-0.5 * (1 - share)``, ``share`` the share of the robots within 3 m
+    tracked within 0.3 m (0 when no robot is that near); each term in ``info["reward_terms"]``.
 
     **info**: v0's, plus in ``perception`` the confirmed tracks (16 rows, by track id):
     ``robots`` (16, 2), ``robot_velocities`` (16, 2), ``robot_covs`` (16, 2, 2),

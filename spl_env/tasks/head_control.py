@@ -34,7 +34,7 @@ class HeadControlTaskConfig(TaskConfig):
 
     error_weight: float = 1.0  # reward per metre of true position error, per step
     uncertainty_weight: float = 0.5  # reward per metre of position std, per step
-    information_weight: float = 0.0  # reward per metre the position std fell this step
+    information_weight: float = 0.0  # reward per metre the position std fell this step (0: off)
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -79,8 +79,11 @@ class HeadControlTask(Task):
     def reward_terms(self, state: WorldState, output: PerceptionOutput) -> dict[str, float]:
         """``position_error``: -error_weight x the true position error (m); ``uncertainty``:
         -uncertainty_weight x the believed position std sqrt(trace Σ_xy) (m); ``information``:
-        information_weight x how much that std fell since the previous step (0 at time 0): a
-        potential-based shaping term that pays for this step's sightings at once."""
+        information_weight x how much that std fell since the previous step (0 at time 0):
+        pays for this step's sightings at once. Over an episode it sums to the weight times the
+        first std less the last; under a discount γ it is the potential-based shaping of
+        ``-information_weight x std`` plus ``-information_weight (1 - γ) std`` a step, an
+        uncertainty penalty beside ``uncertainty``'s."""
         slam = output.get_as(SELF_POSE, SlamEstimate)
         error = float(np.hypot(*(state.robot_pose[:2] - slam.pose[:2])))
         std = float(math.sqrt(max(np.trace(slam.pose_cov[:2, :2]), 0.0)))

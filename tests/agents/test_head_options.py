@@ -1,4 +1,3 @@
-import json
 import math
 from collections.abc import Iterator
 from pathlib import Path
@@ -116,10 +115,12 @@ def test_load_policy_wraps_a_model_trained_on_options(tmp_path: Path, env: gym.E
         tmp_path / "model.zip"
     )
     wrapped.close()
-    config = {"policy": "MultiInputPolicy", "ppo": {}, "env_kwargs": {}, "head_options": True}
-    (tmp_path / "config.json").write_text(json.dumps(config))
+    # no config.json beside it (as RL Zoo saves it): the Discrete action space says options
     policy = load_policy(str(tmp_path / "model.zip"), env.get_wrapper_attr("config"))
     assert isinstance(policy, OptionPolicy)
     obs, _ = env.reset(seed=0)
     action, _ = policy.predict(obs, episode_start=np.array([True]))
     assert env.action_space.contains(action)
+    batch = {k: np.stack([v, v]) for k, v in obs.items()}
+    with pytest.raises(ValueError, match="one observation"):
+        policy.predict(batch)

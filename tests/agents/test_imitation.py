@@ -55,6 +55,14 @@ def test_warm_start_config_accepts_zero_value_weight() -> None:
     assert WarmStartConfig(teacher="scan", value_weight=0.0).value_weight == 0.0
 
 
+def test_value_targets_stop_short_of_the_time_limit() -> None:
+    env = gym.make(ENV_ID, **ENV_KWARGS)
+    demos = record_teacher(env, WarmStartConfig(teacher="fixed", episodes=1, epochs=1), 0.5, 0)
+    env.close()
+    # γ = 0.5: the 3 / (1 - γ) = 6 steps before the limit are no value targets
+    np.testing.assert_array_equal(demos.value_mask, [True] * 14 + [False] * 6)
+
+
 def test_record_teacher_matches_an_independent_replay() -> None:
     env = gym.make(ENV_ID, **ENV_KWARGS)
     gamma, seed = 0.9, 3
@@ -66,6 +74,9 @@ def test_record_teacher_matches_an_independent_replay() -> None:
     assert all(v.shape[0] == 40 for v in demos.observations.values())
     fixed = FixedHead.from_config(config).look(0.0, 0.0)
     np.testing.assert_array_equal(demos.actions, np.tile(fixed, (40, 1)))
+    # each 20-step episode ends at its time limit: the last 3 / (1 - 0.9) = 30 steps' returns
+    # (all of them) miss what follows, and no value target is kept
+    assert not demos.value_mask.any()
 
     replay = gym.make(ENV_ID, **ENV_KWARGS)
     for episode in range(2):

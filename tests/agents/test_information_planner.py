@@ -13,6 +13,7 @@ import spl_env  # noqa: F401  (registers the ids)
 from agents.baselines import GreedyInformation, HeadScan
 from agents.information_gain import information_gain, range_bearing_jacobian
 from spl_env.config import EnvConfig
+from spl_env.robots.nao import RobotConfig
 
 
 def _range_bearing(pose: np.ndarray, landmark: np.ndarray) -> np.ndarray:
@@ -117,7 +118,7 @@ def _obs(
     obs["landmarks_std"][:] = 0.05 / (0.05 + 0.5)
     obs["landmarks_since_seen"][:] = since / (since + 2.0)
     x, y, heading = 0.5, -1.0, math.radians(20.0)
-    half_l, half_w = 4.5 + 0.7, 3.0 + 0.7  # the carpet: field plus border strip
+    half_l, half_w = (size / 2 for size in config.scene.dimensions.carpet_size_m)
     obs["self_pose_field"][:] = [x / half_l, y / half_w, math.cos(heading), math.sin(heading)]
     std = np.array([0.2, 0.2, 0.1])
     obs["self_pose_std"][:] = std / (std + 0.5)
@@ -126,7 +127,7 @@ def _obs(
 
 
 def _yaw_deg(action: np.ndarray) -> float:
-    return math.degrees(float(action[0]) * math.radians(119.5))
+    return math.degrees(float(action[0]) * RobotConfig().head_yaw_limit_rad)
 
 
 def _counted_half_view_deg(policy: GreedyInformation) -> float:
@@ -212,16 +213,16 @@ def test_greedy_sweeps_each_explore_period_while_a_pole_is_unmapped(
         mapped=[True, True, True, True, True, False],
     )
     greedy_actions, scan_actions = [], []
-    for k in range(200):
+    for k in range(201):
         start = np.array([k == 0])
         greedy_actions.append(greedy.predict(obs, episode_start=start)[0])
         scan_actions.append(scan.predict(obs, episode_start=start)[0])
     g, s = np.array(greedy_actions), np.array(scan_actions)
-    # steps of 0.1 s; two steps of slack at each end: the policies' clocks add up 0.1 s steps,
-    # which puts the second and third sweeps at steps 81 and 162
+    # steps of 0.1 s: a 40-step sweep every 80 steps
     for sweep in (0, 80, 160):
-        np.testing.assert_array_equal(g[sweep + 2 : sweep + 38], s[sweep + 2 : sweep + 38])
-    for between in (slice(43, 78), slice(124, 158)):
+        np.testing.assert_array_equal(g[sweep : sweep + 40], s[sweep : sweep + 40])
+        assert not np.allclose(g[sweep + 40], s[sweep + 40])  # the sweep is over
+    for between in (slice(41, 80), slice(121, 160)):
         assert np.ptp(g[between, 0]) == 0.0  # the held target
         assert abs(_yaw_deg(g[between][0]) - 60.0) <= _counted_half_view_deg(greedy)
         assert not np.allclose(g[between], s[between])

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -81,9 +82,10 @@ def test_moving_mean_by_hand() -> None:
         moving_mean(values, 0)
 
 
-def _write_monitor(path: Path, rows: list[tuple[float, int, float]]) -> None:
+def _write_monitor(path: Path, rows: list[tuple[float, int, float]], t_start: float = 0.0) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
-    lines = ['#{"t_start": 0, "env_id": "x"}', "r,l,t"]
+    header = json.dumps({"t_start": t_start, "env_id": "x"})
+    lines = ["#" + header, "r,l,t"]
     lines += [f"{r},{length},{t}" for r, length, t in rows]
     path.write_text("\n".join(lines) + "\n")
 
@@ -100,6 +102,15 @@ def test_read_monitor_merges_envs_by_end_time(tmp_path: Path) -> None:
     # end times 2.0, 3.0, 5.0, 6.5: lengths 100, 80, 50, 20
     np.testing.assert_allclose(steps, [100, 180, 230, 250])
     np.testing.assert_allclose(returns, [1.5, -1.0, 2.5, 4.0])
+
+
+def test_read_monitor_orders_by_each_envs_own_start(tmp_path: Path) -> None:
+    run = tmp_path / "run"
+    _write_monitor(run / "monitor" / "0.monitor.csv", [(1.0, 10, 5.0)], t_start=100.0)
+    _write_monitor(run / "monitor" / "1.monitor.csv", [(2.0, 20, 1.0)], t_start=110.0)
+    steps, returns = read_monitor(run)  # ends at 105 and 111 s: env 0's episode first
+    np.testing.assert_allclose(steps, [10, 30])
+    np.testing.assert_allclose(returns, [1.0, 2.0])
 
 
 def test_read_monitor_needs_monitor_files(tmp_path: Path) -> None:

@@ -176,8 +176,12 @@ def test_information_term_pays_for_the_fall_of_the_position_std() -> None:
         fell, rose = fell or new_std < std, rose or new_std > std
         std = new_std
     assert fell and rose  # sightings shrink the std, walking without them grows it
-    _, info = env.reset(seed=6)
-    assert info["reward_terms"]["information"] == 0.0  # a new episode forgets the old std
+    _, info = env.reset(seed=6)  # a new episode: the first step compares with its reset's std
+    assert info["reward_terms"]["information"] == 0.0
+    reset_std = float(np.sqrt(np.trace(info["perception"]["pose_cov"][:2, :2])))
+    info = env.step(np.array([0.0, 0.0], dtype=np.float32))[4]
+    new_std = float(np.sqrt(np.trace(info["perception"]["pose_cov"][:2, :2])))
+    assert info["reward_terms"]["information"] == pytest.approx(4.0 * (reset_std - new_std))
     env.close()
 
 
