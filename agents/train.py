@@ -41,18 +41,32 @@ def default_config_path(env_id: str) -> Path:
 
 
 def load_config(path: Path) -> dict[str, Any]:
-    """Read a training config (JSON with ``policy``, ``env_kwargs`` and ``ppo`` keys, optional
-    ``n_envs``, ``head_options`` and ``warm_start``)."""
+    """Read a training config (JSON; :func:`check_config`)."""
     config = json.loads(path.read_text())
+    check_config(config, f"training config {path}")
+    return config
+
+
+def check_config(config: Any, source: str = "training config") -> None:
+    """Refuse a training config that lacks ``policy``, ``env_kwargs`` or ``ppo``, or whose
+    optional ``n_envs`` (int >= 1), ``head_options`` (bool) or ``warm_start``
+    (:class:`agents.imitation.WarmStartConfig` fields; not with ``head_options``) is wrong."""
+    if not isinstance(config, dict):
+        raise TypeError(f"{source} must be a JSON object, got {type(config).__name__}")
     missing = {"policy", "env_kwargs", "ppo"} - set(config)
     if missing:
-        raise ValueError(f"training config {path} lacks keys {sorted(missing)}")
+        raise ValueError(f"{source} lacks keys {sorted(missing)}")
     if not isinstance(config.get("head_options", False), bool):
-        raise ValueError(f"training config {path}: head_options must be true or false")
+        raise ValueError(
+            f"{source}: head_options must be true or false, got {config['head_options']!r}"
+        )
     n_envs = config.get("n_envs", 1)
     if isinstance(n_envs, bool) or not isinstance(n_envs, int) or n_envs < 1:
-        raise ValueError(f"training config {path}: n_envs must be an int >= 1, got {n_envs!r}")
-    return config
+        raise ValueError(f"{source}: n_envs must be an int >= 1, got {n_envs!r}")
+    if "warm_start" in config:
+        if config.get("head_options", False):
+            raise ValueError(f"{source} takes head_options or warm_start, not both")
+        WarmStartConfig(**config["warm_start"])
 
 
 TEACHER_SEED0 = 10_000  # a warm start's teacher plays seeds 10 000 (seed + 1) + k
@@ -85,13 +99,12 @@ def train(
 
     if timesteps < 1:
         raise ValueError(f"timesteps must be >= 1, got {timesteps}")
+    check_config(config)
+    n_envs, head_options = config.get("n_envs", 1), config.get("head_options", False)
     # the envs take the cores: a second torch thread only spins against them (a 2-core
     # machine ran 3x slower with torch's default threads beside busy env workers)
+    threads = torch.get_num_threads()
     torch.set_num_threads(1)
-    n_envs = config.get("n_envs", 1)
-    head_options = config.get("head_options", False)
-    if head_options and "warm_start" in config:
-        raise ValueError("a training config takes head_options or warm_start, not both")
     env = make_vec_env(
         partial(make_training_env, env_id, config["env_kwargs"], head_options),
         n_envs=n_envs,
@@ -99,27 +112,35 @@ def train(
         monitor_dir=str(out / "monitor"),
         vec_env_cls=SubprocVecEnv if n_envs > 1 else DummyVecEnv,
     )
-    model = PPO(
-        config["policy"],
-        env,
-        seed=seed,
-        device="cpu",
-        verbose=0,
-        tensorboard_log=str(tensorboard) if tensorboard else None,
-        **config["ppo"],
-    )
-    resolved: dict[str, Any] = {**config, "env_id": env_id, "timesteps": timesteps, "seed": seed}
-    if "warm_start" in config:
-        warm = WarmStartConfig(**config["warm_start"])
-        teacher_env = make_training_env(env_id, config["env_kwargs"])
-        demos = record_teacher(teacher_env, warm, model.gamma, seed=TEACHER_SEED0 * (seed + 1))
-        teacher_env.close()
-        resolved["warm_start_losses"] = imitate(model, demos, warm, seed)
-    model.learn(total_timesteps=timesteps, progress_bar=progress_bar)
-    out.mkdir(parents=True, exist_ok=True)
-    model.save(out / "model.zip")
-    (out / "config.json").write_text(json.dumps(resolved, indent=2))
-    env.close()
+    try:
+        model = PPO(
+            config["policy"],
+            env,
+            seed=seed,
+            device="cpu",
+            verbose=0,
+            tensorboard_log=str(tensorboard) if tensorboard else None,
+            **config["ppo"],
+        )
+        resolved: dict[str, Any] = {
+            **config,
+            "env_id": env_id,
+            "timesteps": timesteps,
+            "seed": seed,
+        }
+        if "warm_start" in config:
+            warm = WarmStartConfig(**config["warm_start"])
+            teacher_env = make_training_env(env_id, config["env_kwargs"])
+            demos = record_teacher(teacher_env, warm, model.gamma, TEACHER_SEED0 * (seed + 1))
+            teacher_env.close()
+            resolved["warm_start_losses"] = imitate(model, demos, warm, seed)
+        model.learn(total_timesteps=timesteps, progress_bar=progress_bar)
+        out.mkdir(parents=True, exist_ok=True)
+        model.save(out / "model.zip")
+        (out / "config.json").write_text(json.dumps(resolved, indent=2))
+    finally:
+        env.close()
+        torch.set_num_threads(threads)
     return out / "model.zip"
 
 

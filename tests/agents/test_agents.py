@@ -6,6 +6,7 @@ import json
 import math
 import shutil
 from pathlib import Path
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -24,7 +25,7 @@ from agents.evaluate import (
     summarise,
 )
 from agents.evaluate import main as evaluate_main
-from agents.train import default_config_path, load_config, train
+from agents.train import check_config, default_config_path, load_config, train
 from spl_env.envs.active_vision import ActiveVisionConfig
 from spl_env.robots.nao import head_action, head_target
 
@@ -255,3 +256,21 @@ def test_cli_counts_below_one_are_usage_errors(
         main([*argv, "--out", str(tmp_path)])
     assert exit_info.value.code == 2
     assert f"{flag} must be >= 1" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("change", "match"),
+    [
+        ({"n_envs": 0}, "n_envs must be an int >= 1, got 0"),
+        ({"n_envs": True}, "n_envs must be an int >= 1, got True"),
+        ({"head_options": "yes"}, "head_options must be true or false, got 'yes'"),
+        ({"head_options": True, "warm_start": {}}, "head_options or warm_start, not both"),
+        ({"warm_start": {"teacher": "nonsense"}}, "teacher"),
+    ],
+)
+def test_training_config_refuses_bad_options(change: dict[str, Any], match: str) -> None:
+    config = {**load_config(default_config_path("SPL/ActiveVision-v0")), **change}
+    with pytest.raises(ValueError, match=match):
+        check_config(config)
+    with pytest.raises(ValueError, match=match):  # before any env process starts
+        train("SPL/ActiveVision-v0", config, 16, Path("unused"), seed=0)
