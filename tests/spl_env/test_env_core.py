@@ -186,7 +186,7 @@ def test_light_info_has_only_reward_terms(env_id: str) -> None:
     for _ in range(3):
         obs, reward, _, _, info = env.step(env.action_space.sample())
         assert set(info) == {"reward_terms"}
-        localisation = {"position_error", "uncertainty"}
+        localisation = {"position_error", "uncertainty", "information"}
         tracks_robots = env_id in ("SPL/ActiveVision-v1", "SPL/ActiveVision-NoPoles-v1")
         awareness = {"robot_awareness"} if tracks_robots else set()
         assert set(info["reward_terms"]) == localisation | awareness
