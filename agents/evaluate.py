@@ -100,10 +100,15 @@ class EpisodeRecord:
 PRETRAINED = "pretrained:"  # policy specs naming a shipped model: pretrained:<name>
 
 
+def pretrained_folder() -> Path:
+    """``agents/pretrained``: the shipped models."""
+    return Path(str(resources.files("agents") / "pretrained"))
+
+
 def pretrained_names() -> list[str]:
-    """Names of the models shipped in ``agents/pretrained`` (``<name>.zip`` beside
+    """Names of the models shipped in :func:`pretrained_folder` (``<name>.zip`` beside
     ``<name>.json``, the config it was trained with)."""
-    folder = Path(str(resources.files("agents") / "pretrained"))
+    folder = pretrained_folder()
     return sorted(p.stem for p in folder.glob("*.zip") if p.with_suffix(".json").is_file())
 
 
@@ -119,8 +124,7 @@ def model_files(spec: str) -> tuple[Path, Path | None] | None:
             raise ValueError(
                 f"policy {spec!r}: no shipped model of that name; shipped: {pretrained_names()}"
             )
-        folder = Path(str(resources.files("agents") / "pretrained"))
-        return folder / f"{name}.zip", folder / f"{name}.json"
+        return pretrained_folder() / f"{name}.zip", pretrained_folder() / f"{name}.json"
     if spec.endswith(".zip"):
         if not Path(spec).is_file():
             raise ValueError(f"policy {spec!r}: no such model file")

@@ -33,10 +33,10 @@ class HeadPrimitives(HeadScan):
     def __init__(self, config: EnvConfig, n_poles: int) -> None:
         super().__init__(config.robot, config.control_dt_s)
         self.n_poles = n_poles
-        model = config.sensors.camera.model
-        self.reach_rad = config.robot.head_yaw_limit_rad + 0.5 * math.atan2(
-            model.width / 2, model.fx
-        )
+        # a pole counts as reachable when the head at its limit holds it inside the image's
+        # central half (half the half field of view beyond the limit)
+        half_fov_rad = math.radians(config.sensors.camera.model.hfov_deg) / 2
+        self.reach_rad = config.robot.head_yaw_limit_rad + half_fov_rad / 2
 
     @property
     def n_options(self) -> int:
