@@ -4,11 +4,14 @@
     python -m agents.evaluate --policy runs/ppo/model.zip --episodes 3 --out outputs/eval_ppo
     python -m agents.evaluate --env SPL/LookAround-v0 --policy look_at_stalest --set frontend=colour
     python -m agents.evaluate --policy pretrained:active_vision --video --out outputs/eval_av
+    python -m agents.evaluate --env SPL/Striker-v0 --policy centre_kick --out outputs/eval_kick
 
 Writes ``metrics.json`` (per episode and mean: return, mean SLAM position error, mean
 odometry-only error, mean pose NEES, landmark error, ``null`` where no landmark was mapped, the
 robot awareness (share of the robots within 3 m tracked within 0.3 m, ``null`` without robot
-tracks), mean wall-clock milliseconds per step) and ``trajectory.png`` (the first episode: true
+tracks), whether the episode ended in a goal for us (``scored``: in the opponent's goal;
+always 0 in ``SPL/Goalie-v0``, ``null`` in envs without goals),
+mean wall-clock milliseconds per step) and ``trajectory.png`` (the first episode: true
 path green, SLAM orange, odometry grey, on the field); with ``--video`` also ``episode.mp4``, the
 first episode's ``env.render()`` frames at the control rate.
 
@@ -39,13 +42,17 @@ from gymnasium import spaces
 
 import spl_env  # noqa: F401  (registers the env ids)
 from agents.baselines import BASELINES
-from agents.head_options import OptionPolicy, pole_count
+from agents.head_options import HeadPrimitives, pole_count
+from agents.options import OptionPolicy, Primitives
+from agents.soccer_baselines import SOCCER_BASELINES
+from agents.striker_options import StrikerPrimitives
 from agents.video import write_video
 from perception.metrics import landmark_errors, pose_nees, position_error
 from spl_env.config import EnvConfig
 from spl_env.field import FieldDimensions
 from spl_env.rendering import ODOM_BGR, SLAM_BGR, TRUE_BGR, TopDownView
 from spl_env.tasks.robot_awareness import RobotAwarenessTaskConfig, awareness_share
+from spl_env.tasks.soccer import SoccerTaskConfig
 
 AWARENESS = RobotAwarenessTaskConfig()  # the robots issue's measure: its radius and match
 
@@ -134,23 +141,36 @@ def model_files(spec: str) -> tuple[Path, Path | None] | None:
 
 
 def load_policy(spec: str, config: EnvConfig) -> Policy:
-    """A baseline by name for an env built from ``config`` (the env's ``config_class``, e.g.
+    """A baseline by name (a head's, :data:`agents.baselines.BASELINES`, or a soccer
+    player's, :data:`agents.soccer_baselines.SOCCER_BASELINES`) for an env built from
+    ``config`` (the env's ``config_class``, e.g.
     :class:`spl_env.envs.active_vision.ActiveVisionConfig`), a shipped model
     (``pretrained:<name>``) or an SB3 PPO ``.zip``."""
     if spec in BASELINES:
         return BASELINES[spec].from_config(config)
+    if spec in SOCCER_BASELINES:
+        return SOCCER_BASELINES[spec].from_config(config)
     files = model_files(spec)
     if files is None:
         raise ValueError(
-            f"policy must be one of {sorted(BASELINES)}, pretrained:<name> (shipped: "
+            f"policy must be one of {sorted(BASELINES)} (head), {sorted(SOCCER_BASELINES)} "
+            f"(soccer), pretrained:<name> (shipped: "
             f"{pretrained_names()}) or an existing .zip path, got {spec!r}"
         )
     from stable_baselines3 import PPO
 
     model = PPO.load(files[0], device="cpu")
-    if isinstance(model.action_space, spaces.Discrete):  # trained on HeadOptions (ours, the Zoo's)
-        return OptionPolicy(model, config, pole_count(model.observation_space))
+    if isinstance(model.action_space, spaces.Discrete):  # trained on options (ours, the Zoo's)
+        return OptionPolicy(model, option_primitives(model.observation_space, config))
     return model
+
+
+def option_primitives(observation_space: spaces.Space, config: EnvConfig) -> Primitives:
+    """The primitives a model trained on options picks from: the striker's for a soccer env
+    (its task config a :class:`spl_env.tasks.soccer.SoccerTaskConfig`), the head's otherwise."""
+    if isinstance(config.task, SoccerTaskConfig):
+        return StrikerPrimitives(config)
+    return HeadPrimitives(config, pole_count(observation_space))
 
 
 def training_config(spec: str) -> dict[str, Any]:
@@ -191,7 +211,8 @@ def run_episode(env: gym.Env, policy: Policy, seed: int, frame_every: int = 0) -
 
 def episode_metrics(record: EpisodeRecord) -> dict[str, float | None]:
     """Summary numbers of one episode (SI units); the landmark error is ``None`` (JSON ``null``)
-    when no landmark was mapped."""
+    when no landmark was mapped, ``scored`` (1 when the episode ended in a goal for us, in the
+    opponent's goal, else 0) ``None`` in envs without a ``goal`` reward term."""
     slam_err = [
         position_error(t, e) for t, e in zip(record.true_poses, record.slam_poses, strict=True)
     ]
@@ -202,7 +223,7 @@ def episode_metrics(record: EpisodeRecord) -> dict[str, float | None]:
         pose_nees(t, e, c)
         for t, e, c in zip(record.true_poses, record.slam_poses, record.pose_covs, strict=True)
     ]
-    gt = record.final_info["ground_truth"]
+    gt, goal = record.final_info["ground_truth"], record.final_info["reward_terms"].get("goal")
     ids, landmarks = mapped_landmarks(record.final_info["perception"])
     lm = landmark_errors(gt["landmark_ids"], gt["landmarks"], ids, landmarks)
     return {
@@ -215,6 +236,7 @@ def episode_metrics(record: EpisodeRecord) -> dict[str, float | None]:
         "mean_landmark_error_m": float(np.mean(lm)) if len(lm) else None,
         "landmarks_mapped": len(lm),
         "robot_awareness": float(np.mean(record.awareness)) if record.awareness else None,
+        "scored": None if goal is None else float(goal > 0),
         "mean_step_ms": 1000.0 * float(np.mean(record.step_seconds[1:])),
         "steps": len(record.true_poses) - 1,
     }
@@ -285,7 +307,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument(
         "--policy",
         default="scan",
-        help=f"{sorted(BASELINES)}, pretrained:<name> ({pretrained_names()}) or a model .zip",
+        help=f"{sorted(BASELINES)} (head), {sorted(SOCCER_BASELINES)} (soccer), "
+        f"pretrained:<name> ({pretrained_names()}) or a model .zip",
     )
     parser.add_argument(
         "--video", action="store_true", help="also write the first episode as episode.mp4"

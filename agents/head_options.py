@@ -10,20 +10,20 @@ the choice. Options, for an env with P poles (``landmarks_*`` keys; P = 0 withou
 - ``P + 1``: look at the nearest tracked robot (the scan step when none is tracked).
 
 :class:`HeadOptions` wraps a head-control env so that its action space is ``Discrete(P + 2)``
-(what PPO trains on); :class:`OptionPolicy` turns a model trained on it back into a policy of
-the plain env (SB3's ``predict`` on the env's own observations and actions).
+(what PPO trains on); :class:`agents.options.OptionPolicy` with :class:`HeadPrimitives` turns a
+model trained on it back into a policy of the plain env.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
 from agents.baselines import HeadScan
+from agents.options import OptionsWrapper, check_option, dict_observation_space
 from spl_env.config import EnvConfig
 
 
@@ -42,10 +42,21 @@ class HeadPrimitives(HeadScan):
     def n_options(self) -> int:
         return self.n_poles + 2
 
+    def observation_space(self, space: spaces.Dict) -> spaces.Dict:
+        """The plain observation space: the head options need nothing derived."""
+        return space
+
+    def observe(self, obs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """The plain observation."""
+        return obs
+
+    def needs_choice(self, obs: dict[str, np.ndarray]) -> bool:
+        """Always: every option looks somewhere else."""
+        return True
+
     def option_action(self, option: int, obs: dict[str, np.ndarray]) -> np.ndarray:
         """The head action (2,) float32 of ``option`` for ``obs``; advances the clock."""
-        if not 0 <= option < self.n_options:
-            raise ValueError(f"option must be in [0, {self.n_options}), got {option}")
+        check_option(option, self.n_options)
         bearing = self.target_bearing(option, obs)
         action = self.act(obs) if bearing is None else self.look(bearing, 0.0)
         self.t_s += self.control_dt_s
@@ -73,60 +84,9 @@ def pole_count(observation_space: spaces.Space) -> int:
     return 0 if mask is None else int(np.prod(mask.shape or ()))
 
 
-class HeadOptions(gym.Wrapper, gym.utils.RecordConstructorArgs):
+class HeadOptions(OptionsWrapper):
     """A head-control env whose action is an option (``Discrete(P + 2)``; module docstring)."""
 
     def __init__(self, env: gym.Env) -> None:
-        gym.utils.RecordConstructorArgs.__init__(self)
-        gym.Wrapper.__init__(self, env)
-        if not isinstance(env.observation_space, spaces.Dict):
-            raise TypeError(
-                f"HeadOptions needs a Dict observation space, got {env.observation_space}"
-            )
-        self.primitives = HeadPrimitives(
-            env.get_wrapper_attr("config"), pole_count(env.observation_space)
-        )
-        self.action_space = spaces.Discrete(self.primitives.n_options)
-        self._obs: dict[str, np.ndarray] | None = None
-
-    def reset(self, **kwargs: Any) -> tuple[Any, dict[str, Any]]:
-        obs, info = self.env.reset(**kwargs)
-        self.primitives.reset()
-        self._obs = obs
-        return obs, info
-
-    def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
-        if self._obs is None:
-            raise RuntimeError("call reset() before step()")
-        option = int(np.asarray(action).reshape(()))
-        obs, reward, terminated, truncated, info = self.env.step(
-            self.primitives.option_action(option, self._obs)
-        )
-        self._obs = obs
-        return obs, float(reward), terminated, truncated, info
-
-
-class OptionPolicy:
-    """A model trained on :class:`HeadOptions` as a policy of the plain env."""
-
-    def __init__(self, model: Any, config: EnvConfig, n_poles: int) -> None:
-        self.model = model
-        self.primitives = HeadPrimitives(config, n_poles)
-
-    def predict(
-        self,
-        obs: dict[str, np.ndarray],
-        state: Any = None,
-        episode_start: Any = None,
-        deterministic: bool = True,
-    ) -> tuple[np.ndarray, None]:
-        """SB3-style: the head action (2,) of the option the model picks for ``obs``."""
-        batched = {k: np.shape(v) for k, v in obs.items() if np.ndim(v) > 1}
-        if batched:
-            raise ValueError(
-                f"obs must be one observation of the plain env (1-D entries), got shapes {batched}"
-            )
-        if episode_start is not None and np.any(episode_start):
-            self.primitives.reset()
-        option, _ = self.model.predict(obs, deterministic=deterministic)
-        return self.primitives.option_action(int(np.asarray(option).reshape(())), obs), None
+        poles = pole_count(dict_observation_space(env, "HeadOptions"))
+        super().__init__(env, HeadPrimitives(env.get_wrapper_attr("config"), poles))

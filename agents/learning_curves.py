@@ -4,8 +4,10 @@
         --out docs/learning_curves/active_vision.png --title SPL/ActiveVision-v1
 
 Each run folder is one line: the episode returns of all its envs in the order they ended,
-against the environment steps taken by then, smoothed by a moving mean over ``--window``
-episodes. ``--baseline NAME=VALUE`` draws a horizontal line (e.g. a scripted policy's return).
+against the agent's steps taken by then (env steps; under an options wrapper that skips steps
+without a choice, such as :class:`agents.striker_options.StrikerOptions`, the choices),
+smoothed by a moving mean over ``--window`` episodes. ``--baseline NAME=VALUE`` draws a
+horizontal line (e.g. a scripted policy's return).
 Needs matplotlib (the ``train`` extra).
 """
 
@@ -72,7 +74,7 @@ def plot(
     for name, value in baselines.items():
         ax.axhline(value, linestyle="--", color="grey", linewidth=1)
         ax.annotate(name, (0, value), textcoords="offset points", xytext=(4, 3), fontsize=8)
-    ax.set_xlabel("environment steps")
+    ax.set_xlabel("agent steps (one per choice under an options wrapper)")
     ax.set_ylabel(f"episode return (moving mean of {window})")
     ax.set_title(title)
     ax.legend(fontsize=8)

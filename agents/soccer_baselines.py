@@ -25,7 +25,7 @@ from perception.geometry import FloatArray
 from spl_env.config import EnvConfig
 from spl_env.observations.base import unsquash
 from spl_env.observations.poles import RANGE_SCALE_M
-from spl_env.robots.nao import in_kick_zone
+from spl_env.robots.nao import RobotConfig, in_kick_zone
 from spl_env.tasks.soccer import goal_centre
 from spl_env.tasks.soccer_skills import (
     SkillCommand,
@@ -35,6 +35,8 @@ from spl_env.tasks.soccer_skills import (
 )
 
 SEARCH_TURN = 0.6  # walk action omega while the ball is unknown (of the turn speed limit)
+GOALIE_RADIUS_M = 1.0  # a track this near the opponent goal's centre is its goalie
+SEARCH = SkillCommand(walk=np.array([0.0, 0.0, SEARCH_TURN]), kick=False)  # turn on the spot
 
 
 def believed_pose(obs: dict[str, np.ndarray], carpet_size_m: tuple[float, float]) -> FloatArray:
@@ -74,8 +76,30 @@ def tracked_robots(obs: dict[str, np.ndarray], pose: FloatArray) -> FloatArray:
     ).reshape(-1, 2)
 
 
+def believed_goalie(
+    obs: dict[str, np.ndarray], pose: FloatArray, goal: FloatArray
+) -> FloatArray | None:
+    """The goalie (2,) (field frame): the confirmed track nearest the goal's centre ``goal``
+    (2,), None when none lies within :data:`GOALIE_RADIUS_M`."""
+    robots = tracked_robots(obs, pose)
+    if len(robots) == 0:
+        return None
+    distances = np.hypot(*(robots - goal).T)
+    nearest = int(np.argmin(distances))
+    return robots[nearest] if distances[nearest] <= GOALIE_RADIUS_M else None
+
+
+def soccer_action(command: SkillCommand, robot: RobotConfig, strength: float = 1.0) -> np.ndarray:
+    """The soccer env's action (5,) float32 of ``command``: the walk, a kick at ``strength``
+    (0-1] or none, its direction (:func:`spl_env.robots.nao.kick_angle`'s inverse, clipped to
+    [-1, 1])."""
+    direction = np.clip(command.kick_angle_rad / robot.kick_max_angle_rad, -1.0, 1.0)
+    kick = strength if command.kick else -1.0
+    return np.array([*command.walk, kick, direction], dtype=np.float32)
+
+
 class SoccerPolicy(ScriptedPolicy):
-    """Base: the field, the skills, and the action of a :class:`SkillCommand`."""
+    """Base: the field, the skills, and the search while the ball is unknown."""
 
     def __init__(self, config: EnvConfig, skills: SkillConfig | None = None) -> None:
         super().__init__(config.robot, config.control_dt_s)
@@ -89,20 +113,12 @@ class SoccerPolicy(ScriptedPolicy):
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         pose = believed_pose(obs, self.dimensions.carpet_size_m)
         ball = believed_ball(obs, pose)
-        if ball is None:
-            return self.action(SkillCommand(walk=np.array([0.0, 0.0, SEARCH_TURN]), kick=False))
-        return self.action(self.skill(obs, pose, ball))
+        command = SEARCH if ball is None else self.skill(obs, pose, ball)
+        return soccer_action(command, self.robot)
 
     @abstractmethod
     def skill(self, obs: dict[str, np.ndarray], pose: FloatArray, ball: FloatArray) -> SkillCommand:
         """What to do with the ball believed at ``ball`` (2,) from ``pose`` (3,)."""
-
-    def action(self, command: SkillCommand) -> np.ndarray:
-        """The env action (5,) float32: the walk, a full-strength kick or none, its direction
-        (:func:`spl_env.robots.nao.kick_angle`'s inverse, clipped to [-1, 1])."""
-        direction = np.clip(command.kick_angle_rad / self.robot.kick_max_angle_rad, -1.0, 1.0)
-        kick = 1.0 if command.kick else -1.0
-        return np.array([*command.walk, kick, direction], dtype=np.float32)
 
 
 class CentreKickStriker(SoccerPolicy):
@@ -119,20 +135,15 @@ class CentreKickStriker(SoccerPolicy):
 class GoalieAwareStriker(CentreKickStriker):
     """Kick at the middle of the wider gap between the tracked goalie and a post."""
 
-    goalie_radius_m = 1.0  # a track this near the goal's centre is the goalie
     goalie_half_width_m = 0.2  # the goalie blocks this far to either side (arms and ball)
 
     def aim(self, obs: dict[str, np.ndarray], pose: FloatArray) -> FloatArray:
         centre = goal_centre(self.dimensions, 1)
-        robots = tracked_robots(obs, pose)
-        if len(robots) == 0:
-            return centre
-        distances = np.hypot(*(robots - centre).T)
-        nearest = int(np.argmin(distances))
-        if distances[nearest] > self.goalie_radius_m:
+        goalie = believed_goalie(obs, pose, centre)
+        if goalie is None:
             return centre
         post = self.dimensions.goal_inner_width_m / 2 - self.dimensions.ball_diameter_m
-        y = float(robots[nearest, 1])
+        y = float(goalie[1])
         left = (y + self.goalie_half_width_m, post)
         right = (-post, y - self.goalie_half_width_m)
         gap = max(left, right, key=lambda g: g[1] - g[0])

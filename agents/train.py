@@ -9,8 +9,10 @@ changed with ``--set`` (env config keys as in ``agents.evaluate``) or by editing
 with ``--config``. A config may set ``n_envs`` (default 1): that many envs step in parallel
 processes (SB3's ``SubprocVecEnv``); and ``warm_start``
 (:class:`agents.imitation.WarmStartConfig` fields): the policy first imitates a scripted one,
-which plays seeds ``10 000 (seed + 1) + k``; or ``head_options: true``: the policy picks what
-to look at (:mod:`agents.head_options`) instead of head angles. Training envs run with
+which plays seeds ``10 000 (seed + 1) + k``; or ``options``: the policy picks among scripted
+primitives (:data:`OPTIONS`: ``"head"`` what to look at, :mod:`agents.head_options`, instead of
+head angles; ``"striker"`` where to kick and how hard, :mod:`agents.striker_options`, instead of
+walk speeds and kicks). Training envs run with
 ``info_level="light"`` (training reads only rewards). Saves ``model.zip``, the resolved
 ``config.json`` (with the warm start's losses per epoch) and each env's episode returns
 (``monitor/*.monitor.csv``, SB3's ``Monitor``; :mod:`agents.learning_curves` plots them) to
@@ -21,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import json
+from collections.abc import Callable
 from functools import partial
 from importlib import resources
 from pathlib import Path
@@ -32,6 +35,13 @@ import spl_env  # noqa: F401  (registers the env ids)
 from agents.evaluate import parse_overrides
 from agents.head_options import HeadOptions
 from agents.imitation import WarmStartConfig, imitate, record_teacher
+from agents.options import OptionsWrapper
+from agents.striker_options import StrikerOptions
+
+OPTIONS: dict[str, Callable[[gym.Env], OptionsWrapper]] = {
+    "head": HeadOptions,
+    "striker": StrikerOptions,
+}
 
 
 def default_config_path(env_id: str) -> Path:
@@ -49,23 +59,25 @@ def load_config(path: Path) -> dict[str, Any]:
 
 def check_config(config: Any, source: str = "training config") -> None:
     """Refuse a training config that lacks ``policy``, ``env_kwargs`` or ``ppo``, or whose
-    optional ``n_envs`` (int >= 1), ``head_options`` (bool) or ``warm_start``
-    (:class:`agents.imitation.WarmStartConfig` fields; not with ``head_options``) is wrong."""
+    optional ``n_envs`` (int >= 1), ``options`` (a key of :data:`OPTIONS`) or ``warm_start``
+    (:class:`agents.imitation.WarmStartConfig` fields; not with ``options``) is wrong."""
     if not isinstance(config, dict):
         raise TypeError(f"{source} must be a JSON object, got {type(config).__name__}")
     missing = {"policy", "env_kwargs", "ppo"} - set(config)
     if missing:
         raise ValueError(f"{source} lacks keys {sorted(missing)}")
-    if not isinstance(config.get("head_options", False), bool):
+    if "head_options" in config:
+        raise ValueError(f'{source}: head_options is now "options": "head"')
+    if "options" in config and config["options"] not in OPTIONS:
         raise ValueError(
-            f"{source}: head_options must be true or false, got {config['head_options']!r}"
+            f"{source}: options must be one of {sorted(OPTIONS)}, got {config['options']!r}"
         )
     n_envs = config.get("n_envs", 1)
     if isinstance(n_envs, bool) or not isinstance(n_envs, int) or n_envs < 1:
         raise ValueError(f"{source}: n_envs must be an int >= 1, got {n_envs!r}")
     if "warm_start" in config:
-        if config.get("head_options", False):
-            raise ValueError(f"{source} takes head_options or warm_start, not both")
+        if "options" in config:
+            raise ValueError(f"{source} takes options or warm_start, not both")
         WarmStartConfig(**config["warm_start"])
 
 
@@ -73,13 +85,13 @@ TEACHER_SEED0 = 10_000  # a warm start's teacher plays seeds 10 000 (seed + 1) +
 
 
 def make_training_env(
-    env_id: str, env_kwargs: dict[str, Any], head_options: bool = False
+    env_id: str, env_kwargs: dict[str, Any], options: str | None = None
 ) -> gym.Env:
     """One training env: ``env_kwargs`` with ``info_level="light"`` unless they say otherwise,
-    wrapped in :class:`agents.head_options.HeadOptions` with ``head_options`` (a module-level
-    function, so that ``SubprocVecEnv`` workers import ``spl_env`` with it)."""
+    wrapped in ``OPTIONS[options]`` unless ``options`` is None (a module-level function, so
+    that ``SubprocVecEnv`` workers import ``spl_env`` with it)."""
     env = gym.make(env_id, **{"info_level": "light", **env_kwargs})
-    return HeadOptions(env) if head_options else env
+    return env if options is None else OPTIONS[options](env)
 
 
 def train(
@@ -100,13 +112,13 @@ def train(
     if timesteps < 1:
         raise ValueError(f"timesteps must be >= 1, got {timesteps}")
     check_config(config)
-    n_envs, head_options = config.get("n_envs", 1), config.get("head_options", False)
+    n_envs, options = config.get("n_envs", 1), config.get("options")
     # the envs take the cores: a second torch thread only spins against them (a 2-core
     # machine ran 3x slower with torch's default threads beside busy env workers)
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
     env = make_vec_env(
-        partial(make_training_env, env_id, config["env_kwargs"], head_options),
+        partial(make_training_env, env_id, config["env_kwargs"], options),
         n_envs=n_envs,
         seed=seed,
         monitor_dir=str(out / "monitor"),

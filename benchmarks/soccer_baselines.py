@@ -15,7 +15,19 @@ egocentric filter's own); and the env steps per second.
     python benchmarks/soccer_baselines.py --mode geometric --episodes 100
     python benchmarks/soccer_baselines.py --mode rendered --episodes 30
 
-Writes ``soccer_baselines_<mode>.json`` and ``.md`` to ``--out`` (``benchmarks/results``).
+Writes ``<name>_<mode>.json`` (with each episode's outcome, 1 = success, for paired
+comparisons) and ``.md`` to ``--out`` (``benchmarks/results``; ``--name`` defaults to
+``soccer_baselines``). ``--players`` replaces the scripted table by any players of
+``agents.evaluate``'s ``--policy`` (learned strikers included):
+
+    python benchmarks/soccer_baselines.py --mode geometric --envs SPL/Striker-v0 \
+        --players centre_kick goalie_aware runs/striker_s0/model.zip runs/striker_s1/model.zip \
+        --group learned=runs/striker_s --paired-with centre_kick --name striker_policies
+
+``--group NAME=PREFIX`` pools the players whose spec starts with PREFIX (one recipe's training
+seeds): the success share over all their episodes (Wilson interval) and the t-interval over
+the seeds' shares; ``--paired-with PLAYER`` gives each player's success share minus that one's
+on the same episodes, with the t-interval of the per-episode differences.
 """
 
 from __future__ import annotations
@@ -30,9 +42,10 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import torch
+from scipy import stats
 
 import spl_env  # noqa: F401  (registers the env ids)
-from agents.soccer_baselines import SOCCER_BASELINES
+from agents.evaluate import load_policy
 
 RESULTS = Path("benchmarks/results")
 RUNS = (
@@ -61,15 +74,15 @@ def run(env_id: str, player: str, args: argparse.Namespace) -> dict[str, Any]:
     if args.mode == "geometric":
         kwargs = {"camera_mode": "geometric", "frontend": "colour"}
     env = gym.make(env_id, **kwargs)
-    policy = SOCCER_BASELINES[player].from_config(env.unwrapped.config)  # type: ignore[attr-defined]
-    successes, returns, errors, relative_errors, steps = 0, [], [], [], 0
+    policy = load_policy(player, env.get_wrapper_attr("config"))
+    outcomes, returns, errors, relative_errors, steps = [], [], [], [], 0
     start = time.perf_counter()
     for seed in range(args.seed, args.seed + args.episodes):
         obs, info = env.reset(seed=seed)
-        policy.reset()
-        done, episode_return = False, 0.0
+        done, episode_return, first = False, 0.0, True
         while not done:
-            action, _ = policy.predict(obs)
+            action, _ = policy.predict(obs, episode_start=np.array([first]), deterministic=True)
+            first = False
             obs, reward, terminated, truncated, info = env.step(action)
             done, episode_return = terminated or truncated, episode_return + float(reward)
             steps += 1
@@ -83,10 +96,11 @@ def run(env_id: str, player: str, args: argparse.Namespace) -> dict[str, Any]:
                 relative = np.array([c * dx + s * dy, -s * dx + c * dy])
                 relative_errors.append(float(np.hypot(*(relative - belief["ball_relative"]))))
         goal = info["reward_terms"]["goal"]
-        successes += goal > 0 if player != "goalie" else goal == 0
+        outcomes.append(int(goal == 0 if env_id == "SPL/Goalie-v0" else goal > 0))
         returns.append(episode_return)
     seconds = time.perf_counter() - start
     env.close()
+    successes = sum(outcomes)
     low, high = wilson(successes, args.episodes)
     return {
         "env": env_id,
@@ -94,11 +108,43 @@ def run(env_id: str, player: str, args: argparse.Namespace) -> dict[str, Any]:
         "episodes": args.episodes,
         "success": successes / args.episodes,
         "success_ci95": [low, high],
+        "outcomes": outcomes,
         "mean_return": float(np.mean(returns)),
         "ball_error_m": error_stats(errors),
         "ball_relative_error_m": error_stats(relative_errors),
         "steps_per_s": steps / seconds,
     }
+
+
+def t_interval(values: list[float]) -> list[float]:
+    """Mean's 95 % Student-t interval of ``values`` (at least 2)."""
+    x = np.asarray(values, dtype=float)
+    half = float(stats.t.ppf(0.975, len(x) - 1) * np.std(x, ddof=1) / np.sqrt(len(x)))
+    return [float(np.mean(x)) - half, float(np.mean(x)) + half]
+
+
+def group_summary(name: str, members: list[dict[str, Any]]) -> dict[str, Any]:
+    """A recipe trained with several seeds (``members``, results of :func:`run` on the same
+    episodes): the pooled success share with its Wilson interval over all episodes, and the
+    t-interval over the members' shares (the training seed's spread)."""
+    outcomes = [o for m in members for o in m["outcomes"]]
+    shares = [m["success"] for m in members]
+    return {
+        "group": name,
+        "members": [m["player"] for m in members],
+        "success": float(np.mean(outcomes)),
+        "success_ci95": list(wilson(sum(outcomes), len(outcomes))),
+        "seed_shares": shares,
+        "seed_shares_ci95": t_interval(shares),
+    }
+
+
+def paired_difference(result: dict[str, Any], reference: dict[str, Any]) -> dict[str, Any]:
+    """``result``'s success share minus ``reference``'s on the same episodes, with the 95 %
+    t-interval of the per-episode differences (each -1, 0 or 1)."""
+    diff = np.subtract(result["outcomes"], reference["outcomes"]).astype(float)
+    interval = t_interval(list(diff)) if np.any(diff != diff[0]) else [diff[0], diff[0]]
+    return {"minus": reference["player"], "difference": float(diff.mean()), "ci95": interval}
 
 
 def error_stats(errors: list[float]) -> dict[str, Any]:
@@ -114,7 +160,7 @@ def error_stats(errors: list[float]) -> dict[str, Any]:
 def markdown(results: list[dict[str, Any]], args: argparse.Namespace) -> str:
     """The results as a markdown table."""
     lines = [
-        f"Scripted soccer players, {args.mode} camera, seeds {args.seed}-"
+        f"Soccer players, {args.mode} camera, seeds {args.seed}-"
         f"{args.seed + args.episodes - 1} (held out)",
         "",
         "| env | player | success (95 % CI) | mean return | ball error near (m): mean / median"
@@ -138,16 +184,74 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--seed", type=int, default=100)
     parser.add_argument("--envs", nargs="*", default=None, help="only these env ids")
+    parser.add_argument(
+        "--players",
+        nargs="*",
+        default=None,
+        help="instead of the scripted table: these players (agents.evaluate's --policy: a "
+        "scripted name, pretrained:<name> or a model .zip) in each of --envs",
+    )
+    parser.add_argument(
+        "--group",
+        nargs="*",
+        default=[],
+        metavar="NAME=PREFIX",
+        help="pool the players whose spec starts with PREFIX (one recipe, several training "
+        "seeds) under NAME",
+    )
+    parser.add_argument(
+        "--paired-with",
+        default=None,
+        metavar="PLAYER",
+        help="also each player's success share minus this one's, paired on the episodes",
+    )
+    parser.add_argument("--name", default="soccer_baselines", help="output file stem")
     parser.add_argument("--out", type=Path, default=RESULTS)
     args = parser.parse_args()
+    if args.players is not None and not args.envs:
+        parser.error("--players needs --envs")
     torch.set_num_threads(1)
-    runs = [r for r in RUNS if args.envs is None or r[0] in args.envs]
+    if args.players is None:
+        runs = [r for r in RUNS if args.envs is None or r[0] in args.envs]
+    else:
+        runs = [(env_id, player) for env_id in args.envs for player in args.players]
+    for pair in args.group:
+        name, sep, prefix = pair.partition("=")
+        matched = sum(player.startswith(prefix) for _, player in runs if prefix)
+        if not (sep and name and prefix) or matched < 2 * len({e for e, _ in runs}):
+            parser.error(f"--group takes NAME=PREFIX matching >= 2 players, got {pair!r}")
+    if args.paired_with is not None and args.paired_with not in {p for _, p in runs}:
+        parser.error(f"--paired-with {args.paired_with!r} is not one of the players")
     results = [run(env_id, player, args) for env_id, player in runs]
+    groups, paired = [], []
+    for env_id in dict.fromkeys(env_id for env_id, _ in runs):
+        played = [r for r in results if r["env"] == env_id]
+        for pair in args.group:
+            name, _, prefix = pair.partition("=")
+            members = [r for r in played if r["player"].startswith(prefix)]
+            if len(members) >= 2:
+                groups.append({"env": env_id, **group_summary(name, members)})
+        reference = [r for r in played if r["player"] == args.paired_with]
+        paired += [
+            {"env": env_id, "player": r["player"], **paired_difference(r, reference[0])}
+            for r in played
+            if reference and r is not reference[0]
+        ]
     args.out.mkdir(parents=True, exist_ok=True)
-    stem = f"soccer_baselines_{args.mode}"
+    stem = f"{args.name}_{args.mode}"
     (args.out / f"{stem}.json").write_text(
-        json.dumps({"mode": args.mode, "seed": args.seed, "results": results}, indent=1)
+        json.dumps(
+            {
+                "mode": args.mode,
+                "seed": args.seed,
+                "results": results,
+                "groups": groups,
+                "paired": paired,
+            },
+            indent=1,
+        )
     )
+    print(json.dumps({"groups": groups, "paired": paired}, indent=1))
     (args.out / f"{stem}.md").write_text(markdown(results, args))
     print(markdown(results, args))
 

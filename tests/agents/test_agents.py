@@ -199,8 +199,11 @@ def test_evaluate_writes_metrics_and_plot(tmp_path: Path) -> None:
         evaluate_main(["--policy", "nonsense", "--episodes", "1", "--out", str(tmp_path)])
 
 
-def _record(mapped: list[bool], estimates: np.ndarray) -> EpisodeRecord:
-    """Two steps at the origin, poles 3 and 5 at (1, 1) and (2, 2); the map in info's layout."""
+def _record(
+    mapped: list[bool], estimates: np.ndarray, reward_terms: dict[str, float] | None = None
+) -> EpisodeRecord:
+    """Two steps at the origin, poles 3 and 5 at (1, 1) and (2, 2); the map in info's layout;
+    the last step's ``reward_terms`` (a head task's by default)."""
     pose = np.zeros(3)
     ids = np.array([3, 5])
     return EpisodeRecord(
@@ -216,8 +219,18 @@ def _record(mapped: list[bool], estimates: np.ndarray) -> EpisodeRecord:
                 "landmarks": estimates,
                 "landmarks_mapped": np.array(mapped),
             },
+            "reward_terms": reward_terms or {"position_error": -0.1},
         },
     )
+
+
+@pytest.mark.parametrize(("goal", "scored"), [(10.0, 1.0), (0.0, 0.0), (-10.0, 0.0), (None, None)])
+def test_scored_says_whether_the_episode_ended_in_our_goal(
+    goal: float | None, scored: float | None
+) -> None:
+    terms = {"time": -0.01} if goal is None else {"goal": goal, "time": -0.01}
+    metrics = episode_metrics(_record([True, True], np.ones((2, 2)), terms))
+    assert metrics["scored"] == scored
 
 
 def test_only_mapped_landmarks_are_scored() -> None:
@@ -263,8 +276,9 @@ def test_cli_counts_below_one_are_usage_errors(
     [
         ({"n_envs": 0}, "n_envs must be an int >= 1, got 0"),
         ({"n_envs": True}, "n_envs must be an int >= 1, got True"),
-        ({"head_options": "yes"}, "head_options must be true or false, got 'yes'"),
-        ({"head_options": True, "warm_start": {}}, "head_options or warm_start, not both"),
+        ({"options": "yes"}, r"options must be one of \['head', 'striker'\], got 'yes'"),
+        ({"options": "head", "warm_start": {}}, "options or warm_start, not both"),
+        ({"head_options": True}, 'head_options is now "options": "head"'),
         ({"warm_start": {"teacher": "nonsense"}}, "teacher"),
     ],
 )

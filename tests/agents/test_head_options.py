@@ -11,7 +11,8 @@ from gymnasium.utils.env_checker import check_env
 import spl_env  # noqa: F401  (registers the env ids)
 from agents.baselines import HeadScan
 from agents.evaluate import load_policy
-from agents.head_options import HeadOptions, HeadPrimitives, OptionPolicy, pole_count
+from agents.head_options import HeadOptions, HeadPrimitives, pole_count
+from agents.options import OptionPolicy
 from spl_env.robots.nao import head_target
 
 GEOMETRIC: dict[str, Any] = {"camera_mode": "geometric", "frontend": "colour", "episode_s": 2.0}
@@ -67,7 +68,7 @@ def test_robot_option_looks_at_the_nearest_tracked_robot(env: gym.Env) -> None:
     obs["robots_mask"][0] = 1.0
     obs["robots_cos_bearing"][0], obs["robots_sin_bearing"][0] = math.cos(-0.4), math.sin(-0.4)
     assert _yaw(env, primitives.option_action(7, obs)) == pytest.approx(-0.4, abs=1e-5)
-    with pytest.raises(ValueError, match="option must be in"):
+    with pytest.raises(ValueError, match=r"option \(the action\) must be in"):
         primitives.option_action(8, obs)
 
 
@@ -99,7 +100,7 @@ class _FixedModel:
 
 def test_option_policy_acts_through_the_primitives(env: gym.Env) -> None:
     config = env.get_wrapper_attr("config")
-    policy = OptionPolicy(_FixedModel(6), config, 6)
+    policy = OptionPolicy(_FixedModel(6), HeadPrimitives(config, 6))
     scan = HeadScan.from_config(config)
     obs = _obs(env)
     for step in range(3):

@@ -6,7 +6,7 @@ import pytest
 
 from agents.evaluate import main as evaluate_main
 from agents.evaluate import model_files, pretrained_names, training_config
-from agents.head_options import OptionPolicy
+from agents.options import OptionPolicy
 
 
 def test_the_active_vision_policy_is_shipped_small_with_its_config() -> None:
@@ -17,7 +17,7 @@ def test_the_active_vision_policy_is_shipped_small_with_its_config() -> None:
     assert model.stat().st_size < 1_000_000
     saved = json.loads(config.read_text())
     assert saved["env_id"] == "SPL/ActiveVision-v1"
-    assert saved["head_options"] is True
+    assert saved["options"] == "head"
     assert training_config("pretrained:active_vision") == saved
 
 
@@ -52,3 +52,17 @@ def test_load_policy_gives_an_option_policy_for_the_shipped_model() -> None:
     action, _ = policy.predict(obs)
     assert env.action_space.contains(action)
     env.close()
+
+
+def test_the_striker_is_shipped_small_and_evaluates_in_its_env(tmp_path: Path) -> None:
+    assert "striker" in pretrained_names()
+    files = model_files("pretrained:striker")
+    assert files is not None and files[1] is not None
+    assert files[0].stat().st_size < 1_000_000
+    saved = training_config("pretrained:striker")
+    assert saved["env_id"] == "SPL/Striker-v0" and saved["options"] == "striker"
+    args = ["--policy", "pretrained:striker", "--episodes", "1", "--out", str(tmp_path)]
+    evaluate_main([*args, "--set", "episode_s=2"])
+    result = json.loads((tmp_path / "metrics.json").read_text())
+    assert result["env"] == "SPL/Striker-v0"
+    assert result["episodes"][0]["scored"] in (0.0, 1.0)
