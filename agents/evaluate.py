@@ -45,7 +45,7 @@ from agents.baselines import BASELINES
 from agents.head_options import HeadPrimitives, pole_count
 from agents.options import OptionPolicy, Primitives
 from agents.soccer_baselines import SOCCER_BASELINES
-from agents.striker_options import StrikerPrimitives
+from agents.striker_options import KICK_GEOMETRY, StrikerPrimitives
 from agents.video import write_video
 from perception.metrics import landmark_errors, pose_nees, position_error
 from spl_env.config import EnvConfig
@@ -166,9 +166,21 @@ def load_policy(spec: str, config: EnvConfig) -> Policy:
 
 
 def option_primitives(observation_space: spaces.Space, config: EnvConfig) -> Primitives:
-    """The primitives a model trained on options picks from: the striker's for a soccer env
-    (its task config a :class:`spl_env.tasks.soccer.SoccerTaskConfig`), the head's otherwise."""
-    if isinstance(config.task, SoccerTaskConfig):
+    """The primitives a model trained on options (whose observation space is
+    ``observation_space``) picks from: the striker's for a soccer env (its task config a
+    :class:`spl_env.tasks.soccer.SoccerTaskConfig`), the head's otherwise; refused when the
+    model was trained on the other kind (``kick_geometry`` in its observations or not)."""
+    soccer = isinstance(config.task, SoccerTaskConfig)
+    striker_model = isinstance(observation_space, spaces.Dict) and KICK_GEOMETRY in (
+        observation_space.spaces
+    )
+    if soccer != striker_model:
+        trained, env = ("striker", "head") if striker_model else ("head", "soccer")
+        raise ValueError(
+            f"the model was trained on {trained} options; it cannot play this {env} env "
+            f"({type(config.task).__name__})"
+        )
+    if soccer:
         return StrikerPrimitives(config)
     return HeadPrimitives(config, pole_count(observation_space))
 

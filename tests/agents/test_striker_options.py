@@ -214,6 +214,10 @@ def test_load_policy_plays_a_striker_model_in_the_plain_env(tmp_path: Path, env:
     policy = load_policy(str(tmp_path / "model.zip"), env.get_wrapper_attr("config"))
     assert isinstance(policy, OptionPolicy)
     assert isinstance(policy.primitives, StrikerPrimitives)
+    head_env = gym.make("SPL/ActiveVision-v1", camera_mode="geometric", frontend="colour")
+    with pytest.raises(ValueError, match="trained on striker options; it cannot play this head"):
+        load_policy(str(tmp_path / "model.zip"), head_env.get_wrapper_attr("config"))
+    head_env.close()
     obs, _ = env.reset(seed=0)
     for step in range(5):
         action, _ = policy.predict(obs, episode_start=np.array([step == 0]))
