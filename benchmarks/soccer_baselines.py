@@ -24,6 +24,8 @@ comparisons) and ``.md`` to ``--out`` (``benchmarks/results``; ``--name`` defaul
         --players centre_kick goalie_aware runs/striker_s0/model.zip runs/striker_s1/model.zip \
         --group learned=runs/striker_s --paired-with centre_kick --name striker_policies
 
+``--set KEY=VALUE`` passes env overrides (``agents.evaluate``'s), e.g.
+``self_pose=field_features`` to localise from the field's lines instead of the poles.
 ``--group NAME=PREFIX`` pools the players whose spec starts with PREFIX (one recipe's training
 seeds): the success share over all their episodes (Wilson interval) and the t-interval over
 the seeds' shares; ``--paired-with PLAYER`` gives each player's success share minus that one's
@@ -45,7 +47,7 @@ import torch
 from scipy import stats
 
 import spl_env  # noqa: F401  (registers the env ids)
-from agents.evaluate import load_policy
+from agents.evaluate import load_policy, parse_overrides
 
 RESULTS = Path("benchmarks/results")
 RUNS = (
@@ -70,9 +72,9 @@ def wilson(successes: int, n: int, z: float = 1.96) -> tuple[float, float]:
 
 def run(env_id: str, player: str, args: argparse.Namespace) -> dict[str, Any]:
     """``args.episodes`` episodes of ``player`` in ``env_id``: outcomes and ball errors."""
-    kwargs: dict[str, Any] = {}
+    kwargs: dict[str, Any] = parse_overrides(args.set)
     if args.mode == "geometric":
-        kwargs = {"camera_mode": "geometric", "frontend": "colour"}
+        kwargs = {"camera_mode": "geometric", "frontend": "colour", **kwargs}
     env = gym.make(env_id, **kwargs)
     policy = load_policy(player, env.get_wrapper_attr("config"))
     outcomes, returns, errors, relative_errors, steps = [], [], [], [], 0
@@ -161,7 +163,7 @@ def markdown(results: list[dict[str, Any]], args: argparse.Namespace) -> str:
     """The results as a markdown table."""
     lines = [
         f"Soccer players, {args.mode} camera, seeds {args.seed}-"
-        f"{args.seed + args.episodes - 1} (held out)",
+        f"{args.seed + args.episodes - 1}" + (f", {' '.join(args.set)}" if args.set else ""),
         "",
         "| env | player | success (95 % CI) | mean return | ball error near (m): mean / median"
         " / p95 | the same relative to the robot | steps/s |",
@@ -205,6 +207,13 @@ def main() -> None:
         metavar="PLAYER",
         help="also each player's success share minus this one's, paired on the episodes",
     )
+    parser.add_argument(
+        "--set",
+        nargs="*",
+        default=[],
+        metavar="KEY=VALUE",
+        help="env config overrides (agents.evaluate's), e.g. self_pose=field_features",
+    )
     parser.add_argument("--name", default="soccer_baselines", help="output file stem")
     parser.add_argument("--out", type=Path, default=RESULTS)
     args = parser.parse_args()
@@ -244,6 +253,7 @@ def main() -> None:
             {
                 "mode": args.mode,
                 "seed": args.seed,
+                "set": args.set,
                 "results": results,
                 "groups": groups,
                 "paired": paired,
