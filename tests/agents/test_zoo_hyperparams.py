@@ -114,7 +114,9 @@ def test_rl_zoo3_trains_and_saves_a_model(tmp_path: Path) -> None:
     env.close()
 
 
-@pytest.mark.parametrize("env_id", ["SPL/ActiveVision-v1", "SPL/Striker-v0"])
+@pytest.mark.parametrize(
+    "env_id", ["SPL/ActiveVision-v1", "SPL/Striker-v0", "SPL/PenaltyShootout-v0"]
+)
 def test_zoo_entries_repeat_the_shipped_training_configs(
     hyperparams: dict[str, Any], env_id: str
 ) -> None:
