@@ -14,6 +14,9 @@ episode tells which aims would have scored. From the table:
   table's aim nearest to what the rule wants): the centre; the middle of the wider gap beside
   the goalie (:class:`agents.soccer_baselines.GoalieAwareStriker`'s rule) on the believed
   goalie (``kick_geometry``), and on the true one;
+- lookup tables from the believed goalie's offset to the aim, fitted on the rows themselves
+  (in sample, an upper bound; and left-one-out): what a learned chooser seeing that offset
+  could reach at best, over all aims and over the striker options' three;
 - where the centre kick's ball crosses the goal line (m off the aim) split into what the
   believed pose and ball at the kick explain (the kick angle computed on them and applied from
   the true pose: heading part, the believed ball's part) and the rest (the kick's own noise).
@@ -24,7 +27,7 @@ episode tells which aims would have scored. From the table:
         --name penalty_aims_field_features
 
 Writes ``<name>_<mode>.json`` (with every row) and ``.md`` to ``--out``
-(``benchmarks/results``).
+(``benchmarks/results``); ``--rows`` summarises an earlier JSON's rows again without playing.
 """
 
 from __future__ import annotations
@@ -50,6 +53,7 @@ from perception.geometry import wrap_angle
 ENV_ID = "SPL/PenaltyShootout-v0"
 AIMS_M = (-0.6, -0.45, -0.3, -0.15, 0.0, 0.15, 0.3, 0.45, 0.6)
 LINE_SLACK_M = 0.05  # a ball this near the goal line at the end reached it (not saved short)
+LOOKUP_BINS = (2, 4, 8)  # bins of the believed goalie offset for the fitted lookups
 
 
 def play_row(wrapped: OptionsWrapper, seed: int, n_aims: int) -> dict[str, Any]:
@@ -129,6 +133,46 @@ def landing_split(rows: list[dict[str, Any]], goal_x: float) -> dict[str, float]
     }
 
 
+def lookup_share(
+    table: np.ndarray, offsets: np.ndarray, aims: list[int], bins: int, leave_one_out: bool
+) -> float:
+    """The share scored by a lookup table fitted on the rows themselves: ``offsets`` (E,) (the
+    believed goalie's, m) cut into ``bins`` quantile bins, each bin's aim the one of ``aims``
+    (indices into ``table`` (E, A) of outcomes) that scored most in it; ``leave_one_out``
+    fits each row's bin without that row."""
+    edges = np.quantile(offsets, np.linspace(0.0, 1.0, bins + 1)[1:-1])
+    binned = np.digitize(offsets, edges)
+    scored = 0
+    for k in range(len(table)):
+        same = binned == binned[k]
+        if leave_one_out:
+            same[k] = False
+        best = aims[int(np.argmax(table[same][:, aims].sum(axis=0)))]
+        scored += int(table[k, best])
+    return scored / len(table)
+
+
+def fitted_lookups(table: np.ndarray, believed: list[float | None]) -> dict[str, Any]:
+    """What a chooser that sees the believed goalie's offset could reach at best: lookup
+    tables (:func:`lookup_share`) over all aims and over the striker options' aims
+    (:class:`agents.striker_options.StrikerOptionsConfig`), fitted on these rows (in
+    sample: an upper bound) and left-one-out; an untracked goalie counts as offset 0."""
+    offsets = np.array([0.0 if g is None else g for g in believed])
+    every = list(range(table.shape[1]))
+    options = [nearest_aim(AIMS_M, aim) for aim in StrikerOptionsConfig().aims_m]
+    return {
+        "all_aims_in_sample": {
+            b: lookup_share(table, offsets, every, b, False) for b in LOOKUP_BINS
+        },
+        "all_aims_leave_one_out": {
+            b: lookup_share(table, offsets, every, b, True) for b in LOOKUP_BINS
+        },
+        "options_aims_in_sample": {
+            b: lookup_share(table, offsets, options, b, False) for b in LOOKUP_BINS
+        },
+    }
+
+
 def summarise(rows: list[dict[str, Any]], aims: tuple[float, ...], env: gym.Env) -> dict[str, Any]:
     """Per-aim shares, the any-aim share, the rules' shares and the centre kick's landing split
     (module doc)."""
@@ -161,6 +205,7 @@ def summarise(rows: list[dict[str, Any]], aims: tuple[float, ...], env: gym.Env)
         "goalie_tracked_share": float(np.mean([g is not None for g in believed])),
         "believed_goalie_y_error_std_m": float(np.std(believed_error)),
         "centre_kick_landing": landing_split(rows, dims.half_length_m),
+        "lookups": fitted_lookups(table, believed),
     }
 
 
@@ -194,7 +239,19 @@ def markdown(summary: dict[str, Any], args: argparse.Namespace, aims: tuple[floa
         f"| some aim scores (knowing the episode's errors) | {a['success']:.0%} "
         f"({a['success_ci95'][0]:.0%}-{a['success_ci95'][1]:.0%}) |"
     )
-    split = summary["centre_kick_landing"]
+    split, lookups = summary["centre_kick_landing"], summary["lookups"]
+
+    def shares(values: dict[Any, float]) -> str:
+        return " / ".join(f"{v:.0%}" for v in values.values())
+
+    bins = " / ".join(str(b) for b in LOOKUP_BINS)
+    lines += [
+        "",
+        f"Lookup tables on the believed goalie's offset ({bins} bins), fitted on these episodes: "
+        f"best of all aims {shares(lookups['all_aims_in_sample'])} in sample, "
+        f"{shares(lookups['all_aims_leave_one_out'])} left-one-out; best of the striker "
+        f"options' aims {shares(lookups['options_aims_in_sample'])} in sample.",
+    ]
     lines += [
         "",
         f"Goalie tracked at the kick chance: {summary['goalie_tracked_share']:.0%}; believed "
@@ -218,18 +275,29 @@ def main() -> None:
     parser.add_argument(
         "--set", nargs="*", default=[], metavar="KEY=VALUE", help="env config overrides"
     )
+    parser.add_argument(
+        "--rows",
+        type=Path,
+        default=None,
+        help="summarise the rows of this earlier JSON again instead of playing (its seeds, "
+        "mode and --set)",
+    )
     parser.add_argument("--name", default="penalty_aims", help="output file stem")
     parser.add_argument("--out", type=Path, default=RESULTS)
     args = parser.parse_args()
     torch.set_num_threads(1)
+    saved = json.loads(args.rows.read_text()) if args.rows is not None else None
+    if saved is not None:
+        args.mode, args.seed, args.set = saved["mode"], saved["seed"], saved["set"]
+        args.episodes = len(saved["rows"])
     kwargs: dict[str, Any] = parse_overrides(args.set)
     if args.mode == "geometric":
         kwargs = {"camera_mode": "geometric", "frontend": "colour", **kwargs}
     env = gym.make(ENV_ID, **kwargs)
     options = StrikerOptionsConfig(aims_m=AIMS_M, strengths=(1.0,))
     wrapped = OptionsWrapper(env, StrikerPrimitives(env.get_wrapper_attr("config"), options))
-    rows = []
-    for seed in range(args.seed, args.seed + args.episodes):
+    rows = [] if saved is None else saved["rows"]
+    for seed in range(args.seed, args.seed + args.episodes) if saved is None else ():
         rows.append(play_row(wrapped, seed, len(AIMS_M)))
         print(seed, rows[-1]["scored"], flush=True)
     wrapped.close()
