@@ -143,11 +143,18 @@ class GoalieAwareStriker(CentreKickStriker):
         if goalie is None:
             return centre
         post = self.dimensions.goal_inner_width_m / 2 - self.dimensions.ball_diameter_m
-        y = float(goalie[1])
-        left = (y + self.goalie_half_width_m, post)
-        right = (-post, y - self.goalie_half_width_m)
-        gap = max(left, right, key=lambda g: g[1] - g[0])
-        return np.array([centre[0], (gap[0] + gap[1]) / 2])
+        y = wider_gap_middle(float(goalie[1]), post, self.goalie_half_width_m)
+        return np.array([centre[0], y])
+
+
+def wider_gap_middle(goalie_y: float, post_m: float, goalie_half_width_m: float) -> float:
+    """The middle (m on the goal line) of the wider gap between a goalie at ``goalie_y``
+    blocking ``goalie_half_width_m`` to either side and the posts at ``±post_m`` (less a
+    ball): :class:`GoalieAwareStriker`'s aim."""
+    left = (goalie_y + goalie_half_width_m, post_m)
+    right = (-post_m, goalie_y - goalie_half_width_m)
+    low, high = max(left, right, key=lambda g: g[1] - g[0])
+    return (low + high) / 2
 
 
 class ScriptedGoalie(SoccerPolicy):

@@ -1,7 +1,7 @@
 """What a penalty striker could gain by choosing where to kick: every episode played once per aim.
 
 Each episode of ``SPL/PenaltyShootout-v0`` (seeds ``--seed`` ..) is played once for each aim of
-``--aims`` (points on the goal line, by their y), at full strength, by the striker options of
+:data:`AIMS_M` (points on the goal line, by their y), at full strength, by the striker options of
 :mod:`agents.striker_options` (the centre-kicking striker's approach; at the kick chance the
 kick towards the aim). The approach does not depend on the aim, and the kick's noise is the
 same draw in every replay of an episode, so the replays differ only by the aim: one row per
@@ -43,11 +43,10 @@ import numpy as np
 import torch
 
 import spl_env  # noqa: F401  (registers the env ids)
-from agents.evaluate import parse_overrides
 from agents.options import OptionsWrapper
-from agents.soccer_baselines import GoalieAwareStriker
+from agents.soccer_baselines import GoalieAwareStriker, wider_gap_middle
 from agents.striker_options import KICK_GEOMETRY, StrikerOptionsConfig, StrikerPrimitives
-from benchmarks.soccer_baselines import RESULTS, wilson
+from benchmarks.soccer_baselines import RESULTS, env_kwargs, wilson
 from perception.geometry import wrap_angle
 
 ENV_ID = "SPL/PenaltyShootout-v0"
@@ -82,20 +81,17 @@ def play_row(wrapped: OptionsWrapper, seed: int, n_aims: int) -> dict[str, Any]:
     return row
 
 
-def nearest_aim(aims: tuple[float, ...], y: float) -> int:
-    """The index of the aim nearest to ``y`` (m)."""
-    return int(np.argmin(np.abs(np.asarray(aims) - y)))
+def nearest_aim(y: float) -> int:
+    """The index of the aim of :data:`AIMS_M` nearest to ``y`` (m)."""
+    return int(np.argmin(np.abs(np.asarray(AIMS_M) - y)))
 
 
 def gap_aim(goalie_y: float | None, post_m: float) -> float:
     """The goalie-aware striker's aim (m on the goal line) for a goalie at ``goalie_y`` (None:
-    none tracked), inner posts at ``±post_m`` less a ball."""
+    none tracked: the centre), inner posts at ``±post_m`` less a ball."""
     if goalie_y is None:
         return 0.0
-    half = GoalieAwareStriker.goalie_half_width_m
-    gaps = ((goalie_y + half, post_m), (-post_m, goalie_y - half))
-    low, high = max(gaps, key=lambda g: g[1] - g[0])
-    return (low + high) / 2
+    return wider_gap_middle(goalie_y, post_m, GoalieAwareStriker.goalie_half_width_m)
 
 
 def rule_share(rows: list[dict[str, Any]], picks: list[int]) -> dict[str, Any]:
@@ -109,7 +105,7 @@ def landing_split(rows: list[dict[str, Any]], goal_x: float) -> dict[str, float]
     wide, not saved short of it): the std (m) of where the believed pose and ball send the ball
     across the line (heading part: the believed heading's error; ball part: the believed
     ball's), of where it crossed, and of the rest (the kick's noise)."""
-    centre = nearest_aim(AIMS_M, 0.0)
+    centre = nearest_aim(0.0)
     reached = [row for row in rows if row["final_ball"][centre][0] >= goal_x - LINE_SLACK_M]
     heading, ball_part, explained, crossed = [], [], [], []
     for row in reached:
@@ -159,7 +155,7 @@ def fitted_lookups(table: np.ndarray, believed: list[float | None]) -> dict[str,
     sample: an upper bound) and left-one-out; an untracked goalie counts as offset 0."""
     offsets = np.array([0.0 if g is None else g for g in believed])
     every = list(range(table.shape[1]))
-    options = [nearest_aim(AIMS_M, aim) for aim in StrikerOptionsConfig().aims_m]
+    options = [nearest_aim(aim) for aim in StrikerOptionsConfig().aims_m]
     return {
         "all_aims_in_sample": {
             b: lookup_share(table, offsets, every, b, False) for b in LOOKUP_BINS
@@ -173,7 +169,7 @@ def fitted_lookups(table: np.ndarray, believed: list[float | None]) -> dict[str,
     }
 
 
-def summarise(rows: list[dict[str, Any]], aims: tuple[float, ...], env: gym.Env) -> dict[str, Any]:
+def summarise(rows: list[dict[str, Any]], env: gym.Env) -> dict[str, Any]:
     """Per-aim shares, the any-aim share, the rules' shares and the centre kick's landing split
     (module doc)."""
     dims = env.get_wrapper_attr("config").scene.dimensions
@@ -182,9 +178,9 @@ def summarise(rows: list[dict[str, Any]], aims: tuple[float, ...], env: gym.Env)
     believed = [None if row["kick_geometry"][2] < 0.5 else row["kick_geometry"][4] for row in rows]
     true_goalie = [row["goalie_true"][1] for row in rows]
     rules = {
-        "centre": [nearest_aim(aims, 0.0)] * len(rows),
-        "gap_believed_goalie": [nearest_aim(aims, gap_aim(g, post)) for g in believed],
-        "gap_true_goalie": [nearest_aim(aims, gap_aim(g, post)) for g in true_goalie],
+        "centre": [nearest_aim(0.0)] * len(rows),
+        "gap_believed_goalie": [nearest_aim(gap_aim(g, post)) for g in believed],
+        "gap_true_goalie": [nearest_aim(gap_aim(g, post)) for g in true_goalie],
     }
     any_aim = int(table.max(axis=1).sum())
     believed_error = [b - t for b, t in zip(believed, true_goalie, strict=True) if b is not None]
@@ -195,7 +191,7 @@ def summarise(rows: list[dict[str, Any]], aims: tuple[float, ...], env: gym.Env)
                 "success": float(table[:, k].mean()),
                 "success_ci95": list(wilson(int(table[:, k].sum()), len(rows))),
             }
-            for k, aim in enumerate(aims)
+            for k, aim in enumerate(AIMS_M)
         ],
         "any_aim": {
             "success": any_aim / len(rows),
@@ -209,7 +205,7 @@ def summarise(rows: list[dict[str, Any]], aims: tuple[float, ...], env: gym.Env)
     }
 
 
-def markdown(summary: dict[str, Any], args: argparse.Namespace, aims: tuple[float, ...]) -> str:
+def markdown(summary: dict[str, Any], args: argparse.Namespace) -> str:
     """The summary as markdown tables."""
     last = args.seed + args.episodes - 1
     lines = [
@@ -218,8 +214,8 @@ def markdown(summary: dict[str, Any], args: argparse.Namespace, aims: tuple[floa
         "",
         "Every episode replayed with each aim (full strength, the same approach and kick noise).",
         "",
-        "| aim (m) | " + " | ".join(f"{a:+.2f}" for a in aims) + " |",
-        "|---|" + "---|" * len(aims),
+        "| aim (m) | " + " | ".join(f"{a:+.2f}" for a in AIMS_M) + " |",
+        "|---|" + "---|" * len(AIMS_M),
         "| scored | " + " | ".join(f"{r['success']:.0%}" for r in summary["per_aim"]) + " |",
         "",
         "| who picks the aim | scored (95 % CI) |",
@@ -290,26 +286,26 @@ def main() -> None:
     if saved is not None:
         args.mode, args.seed, args.set = saved["mode"], saved["seed"], saved["set"]
         args.episodes = len(saved["rows"])
-    kwargs: dict[str, Any] = parse_overrides(args.set)
-    if args.mode == "geometric":
-        kwargs = {"camera_mode": "geometric", "frontend": "colour", **kwargs}
-    env = gym.make(ENV_ID, **kwargs)
-    options = StrikerOptionsConfig(aims_m=AIMS_M, strengths=(1.0,))
-    wrapped = OptionsWrapper(env, StrikerPrimitives(env.get_wrapper_attr("config"), options))
-    rows = [] if saved is None else saved["rows"]
-    for seed in range(args.seed, args.seed + args.episodes) if saved is None else ():
-        rows.append(play_row(wrapped, seed, len(AIMS_M)))
-        print(seed, rows[-1]["scored"], flush=True)
-    wrapped.close()
-    summary = summarise(rows, AIMS_M, env)
+    env = gym.make(ENV_ID, **env_kwargs(args.mode, args.set))
+    if saved is not None:
+        rows = saved["rows"]
+    else:
+        options = StrikerOptionsConfig(aims_m=AIMS_M, strengths=(1.0,))
+        wrapped = OptionsWrapper(env, StrikerPrimitives(env.get_wrapper_attr("config"), options))
+        rows = []
+        for seed in range(args.seed, args.seed + args.episodes):
+            rows.append(play_row(wrapped, seed, len(AIMS_M)))
+            print(seed, rows[-1]["scored"], flush=True)
+    summary = summarise(rows, env)
+    env.close()
     args.out.mkdir(parents=True, exist_ok=True)
     stem = f"{args.name}_{args.mode}"
     result = {"mode": args.mode, "seed": args.seed, "set": args.set, "aims_m": AIMS_M}
     (args.out / f"{stem}.json").write_text(
         json.dumps({**result, **summary, "rows": rows}, indent=1)
     )
-    (args.out / f"{stem}.md").write_text(markdown(summary, args, AIMS_M))
-    print(markdown(summary, args, AIMS_M))
+    (args.out / f"{stem}.md").write_text(markdown(summary, args))
+    print(markdown(summary, args))
 
 
 if __name__ == "__main__":

@@ -70,12 +70,18 @@ def wilson(successes: int, n: int, z: float = 1.96) -> tuple[float, float]:
     return (centre - half, centre + half)
 
 
+def env_kwargs(mode: str, overrides: list[str]) -> dict[str, Any]:
+    """The env kwargs of camera ``mode`` (``rendered``, the default env; ``geometric``, with the
+    colour front end it emulates) and the ``KEY=VALUE`` ``overrides`` (``--set``)."""
+    kwargs: dict[str, Any] = parse_overrides(overrides)
+    if mode == "geometric":
+        kwargs = {"camera_mode": "geometric", "frontend": "colour", **kwargs}
+    return kwargs
+
+
 def run(env_id: str, player: str, args: argparse.Namespace) -> dict[str, Any]:
     """``args.episodes`` episodes of ``player`` in ``env_id``: outcomes and ball errors."""
-    kwargs: dict[str, Any] = parse_overrides(args.set)
-    if args.mode == "geometric":
-        kwargs = {"camera_mode": "geometric", "frontend": "colour", **kwargs}
-    env = gym.make(env_id, **kwargs)
+    env = gym.make(env_id, **env_kwargs(args.mode, args.set))
     policy = load_policy(player, env.get_wrapper_attr("config"))
     outcomes, returns, errors, relative_errors, steps = [], [], [], [], 0
     start = time.perf_counter()

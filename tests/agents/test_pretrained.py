@@ -54,6 +54,17 @@ def test_load_policy_gives_an_option_policy_for_the_shipped_model() -> None:
     env.close()
 
 
+def test_the_shipped_head_policy_is_refused_on_a_soccer_env() -> None:
+    import gymnasium as gym
+
+    from agents.evaluate import load_policy
+
+    env = gym.make("SPL/PenaltyShootout-v0", camera_mode="geometric", frontend="colour")
+    with pytest.raises(ValueError, match="trained on head options; it cannot play this soccer"):
+        load_policy("pretrained:active_vision", env.get_wrapper_attr("config"))
+    env.close()
+
+
 def test_the_striker_is_shipped_small_and_evaluates_in_its_env(tmp_path: Path) -> None:
     assert "striker" in pretrained_names()
     files = model_files("pretrained:striker")

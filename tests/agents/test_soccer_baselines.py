@@ -1,4 +1,5 @@
-"""The scripted soccer players run in their envs and act inside the action space."""
+"""The scripted soccer players run in their envs and act inside the action space; the
+goalie-aware striker's aim on known geometry."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import numpy as np
 import pytest
 
 import spl_env  # noqa: F401  (registers the ids)
-from agents.soccer_baselines import SOCCER_BASELINES
+from agents.soccer_baselines import SOCCER_BASELINES, wider_gap_middle
 
 PLAYERS = [
     ("SPL/PenaltyShootout-v0", "centre_kick"),
@@ -48,3 +49,19 @@ def test_the_penalty_taker_walks_up_and_kicks() -> None:
         done = terminated or truncated
     assert fastest > 1.0
     env.close()
+
+
+@pytest.mark.parametrize(
+    ("goalie_y", "expected"),
+    [
+        (0.3, (-0.7 + 0.1) / 2),  # gaps [0.5, 0.7] and [-0.7, 0.1]: the right one
+        (-0.3, (-0.1 + 0.7) / 2),  # the mirror image
+        (0.0, (0.2 + 0.7) / 2),  # equal gaps: the left (the first) one
+        (0.9, 0.0),  # a goalie beyond the post: the left gap is empty, the right one whole
+    ],
+)
+def test_the_goalie_aware_aim_is_the_middle_of_the_wider_gap(
+    goalie_y: float, expected: float
+) -> None:
+    """Posts at ±0.7 m, a goalie blocking 0.2 m to either side, gaps worked out by hand."""
+    assert wider_gap_middle(goalie_y, 0.7, 0.2) == pytest.approx(expected)
