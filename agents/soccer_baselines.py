@@ -8,9 +8,9 @@
 - :class:`ScriptedGoalie`: stand between the believed ball and our goal's centre; kick the ball
   away when it lies in the kick zone.
 
-While the ball is unknown (never seen) they turn on the spot (the env's head scans). The
-skills are :mod:`spl_env.tasks.soccer_skills`' (the env's scripted opponents use them on the
-truth). Built from the env's config (``from_config``).
+While no ball is believed (not seen yet, or lost) they turn on the spot (the env's head
+scans). The skills are :mod:`spl_env.tasks.soccer_skills`' (the env's scripted opponents use
+them on the truth). Built from the env's config (``from_config``).
 """
 
 from __future__ import annotations

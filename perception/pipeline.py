@@ -182,7 +182,7 @@ PROVIDERS: Mapping[str, Mapping[str, ProviderFactory]] = {
         "oracle": lambda c, ctx: OracleBallSightings(c.oracle, ctx),
     },
     BALL: {
-        "filter": lambda c, ctx: TrackedBall(c.ball_filter),
+        "filter": lambda c, ctx: TrackedBall(c.ball_filter, c.cnn_ball.radius_m),
         "oracle": lambda c, ctx: OracleBall(c.oracle),
     },
     CIRCLE_MAP: {

@@ -204,9 +204,9 @@ class BallEstimate:
 
     ``state`` (4,) ``(x, y, vx, vy)`` (m, m/s, field frame) with covariance ``cov`` (4, 4) (the
     believed pose's uncertainty included); ``relative`` (4,) the same in our robot's frame with
-    ``relative_cov`` (4, 4); ``known`` False until the ball was first seen (the states are then
-    zero: the ball may be anywhere); ``last_seen_s`` the time (s) of its last sighting (-inf
-    before the first).
+    ``relative_cov`` (4, 4); ``known`` False while no ball is believed: before its first
+    sighting, or once lost (the states are then zero: the ball may be anywhere);
+    ``last_seen_s`` the time (s) of its last sighting (-inf before the first).
     """
 
     state: FloatArray

@@ -16,7 +16,7 @@ from perception.representations import (
 )
 from perception.tracking.ball_filter import BallFilter, BallFilterConfig
 from perception.types import BallEstimate, BallSighting, OdometryStep, SlamEstimate
-from perception.vision.cnn_ball import CnnBallConfig, ball_sightings
+from perception.vision.cnn_ball import CnnBallConfig, ball_in_view, ball_sightings
 from perception.vision.cnn_detector import CnnDetectorConfig
 
 
@@ -67,14 +67,16 @@ class TwoCameraCnnBallSightings(CnnBallSightings):
 
 class TrackedBall(Provider):
     """The ball's egocentric Kalman filter (:mod:`perception.tracking.ball_filter`): this
-    frame's ball sightings, the odometry and our own kicks; placed on the field with the
+    frame's ball sightings, the odometry and our own kicks, and whether the believed ball (a
+    ball of ``radius_m``) shows in the top camera's image; placed on the field with the
     believed pose."""
 
     provides = BALL
-    requires = (BALL_SIGHTINGS, ODOMETRY, SELF_POSE, "kick_velocity")
+    requires = (BALL_SIGHTINGS, ODOMETRY, SELF_POSE, "kick_velocity", "camera", "camera_state")
 
-    def __init__(self, config: BallFilterConfig) -> None:
+    def __init__(self, config: BallFilterConfig, radius_m: float) -> None:
         self.filter = BallFilter(config)
+        self.radius_m = radius_m
 
     def reset(self, prior: Prior) -> None:
         self.filter.reset()
@@ -85,6 +87,13 @@ class TrackedBall(Provider):
             raise TypeError(f"self_pose must be a SlamEstimate, got {type(pose).__name__}")
         if not isinstance(odometry, OdometryStep):
             raise TypeError(f"odometry must be an OdometryStep, got {type(odometry).__name__}")
+        camera, state = inputs["camera"], inputs["camera_state"]
+        margin = self.filter.config.view_margin
         return self.filter.update(
-            time_s, inputs[BALL_SIGHTINGS], odometry.delta, pose, inputs["kick_velocity"]
+            time_s,
+            inputs[BALL_SIGHTINGS],
+            odometry.delta,
+            pose,
+            inputs["kick_velocity"],
+            in_view=lambda point: ball_in_view(point, camera, state, self.radius_m, margin),
         )

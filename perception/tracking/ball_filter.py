@@ -27,23 +27,39 @@ Each frame's ball sightings (range, bearing) become robot-frame points with cova
 chi-square gate at ``gate_probability``. When none passes, the ball may have been kicked since
 the last frame: the prediction is made again from the last frame with the velocity's covariance
 grown by ``kick_velocity_std_mps`` squared per axis (a velocity jump of that size at the last
-frame), and the gate tried again. A sighting still outside is kept as a candidate; when the next
-frame's sighting agrees with it (within the gate of their joint covariance, after the robot's
-motion) and still not with the filter, the filter restarts there (the ball was moved, or the
-filter had followed a false sighting). The first sighting starts the filter at rest with
-velocity std ``initial_velocity_std_mps``.
+frame), and the gate tried again. A sighting that passes it is fused there if the last frame
+fused a sighting; if not, the belief had gone unconfirmed, and a jump at the last frame would
+make up a velocity to explain how far it drifted since: the filter restarts at the sighting
+instead. A sighting still outside is kept as a candidate; when the next frame's sighting agrees
+with it (within the gate of their joint covariance, after the robot's motion) and still not
+with the filter, the filter restarts there (the ball was moved, or the filter had followed a
+false sighting). The first sighting starts the filter at rest with velocity std
+``initial_velocity_std_mps``.
+
+A belief left without sightings grows uncertain (the ball rolls on in it, or a ball stopped by a
+robot rolls on only in the belief): once its position std (the root of the trace of the
+position covariance) exceeds ``lost_std_m``, the ball is lost. The filter forgets it (``known``
+False, as before the first sighting; ``last_seen_s`` kept) and the next sighting starts it
+afresh, so that nobody walks after a belief that has nothing left to do with the ball. So it is
+when the belief lay where the camera would have seen it (``in_view``, within
+``reliable_range_m``) in ``lost_after_misses`` frames since its last fused sighting, and the
+ball was not seen there.
 
 Our own kicks are known to the robot's motion: a kick's intended velocity (robot frame) given to
 a ball believed in front of the feet (``own_kick_reach_m`` ahead, ``own_kick_half_width_m`` to
 either side) sets the ball's velocity to that kick's rolling
 velocity (``own_kick_rolling_fraction`` of it) with std ``own_kick_std_mps`` on each axis,
-forgetting the velocity's correlations.
+forgetting the velocity's correlations. A kick may also leave the ball where it was (blocked by
+a robot behind it, or the ball not quite in the kick zone), so the belief without the kick is
+kept beside it, predicted alike, until a sighting is fused: a sighting is fused into whichever
+of the two gives it the higher likelihood, and when the kicked belief is lost the ball is
+believed where it was, if that belief is not lost too.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -53,7 +69,12 @@ from perception.estimation.kalman import joseph_update
 from perception.geometry import FloatArray, rot_z
 from perception.tracking.robot_tracker import sighting_in_field
 from perception.types import BallEstimate, BallSighting, SlamEstimate
-from perception.validation import check_in_interval, check_positive, check_probability
+from perception.validation import (
+    check_in_interval,
+    check_int,
+    check_positive,
+    check_probability,
+)
 
 _OWNER = "BallFilterConfig"
 _H = np.hstack([np.eye(2), np.zeros((2, 2))])  # the sightings measure the position
@@ -73,6 +94,14 @@ class BallFilterConfig:
     # chi-square gate (2 dof) of a sighting against the filter: a sighting outside it is taken
     # for a kick, so a genuine one should rarely fall outside (1 in 1000)
     gate_probability: float = 0.999
+    # A belief whose position std (m, root of the trace of the position covariance) exceeds
+    # this is dropped: the ball is lost. A ball at rest, unseen, gets there after about 3 s.
+    lost_std_m: float = 1.0
+    # ... and so is one that lay in view, within reliable_range_m (m; where the top camera
+    # finds 80-90 % of the balls), in this many frames since its last fused sighting
+    lost_after_misses: int = 3
+    reliable_range_m: tuple[float, float] = (0.6, 3.0)
+    view_margin: float = 0.1  # in view: this share of the image's size inside its edges
     # The walk odometry's noise as the filter takes it (a share of each step's distance and
     # turn, and a floor on the turn's std per frame)
     odometry_translation_std_fraction: float = 0.1
@@ -94,6 +123,7 @@ class BallFilterConfig:
             "acceleration_psd",
             "initial_velocity_std_mps",
             "kick_velocity_std_mps",
+            "lost_std_m",
             "own_kick_reach_m",
             "own_kick_half_width_m",
             "own_kick_std_mps",
@@ -106,6 +136,15 @@ class BallFilterConfig:
         ):
             check_positive(_OWNER, name, getattr(self, name), allow_zero=True)
         check_probability(_OWNER, "gate_probability", self.gate_probability, float_only=True)
+        check_int(_OWNER, "lost_after_misses", self.lost_after_misses, 1)
+        check_in_interval(_OWNER, "view_margin", self.view_margin, 0.0, 0.5)
+        low, high = self.reliable_range_m
+        check_positive(_OWNER, "reliable_range_m[0]", low, allow_zero=True)
+        if not low < high:
+            raise ValueError(
+                f"{_OWNER}.reliable_range_m must be (low, high) with low < high, got "
+                f"{self.reliable_range_m}"
+            )
         check_in_interval(
             _OWNER,
             "own_kick_rolling_fraction",
@@ -171,6 +210,12 @@ def moved_frame(
     return moved, G, Q
 
 
+def position_std(cov: FloatArray) -> float:
+    """The position std (m) of a ball state's covariance ``cov`` (4, 4): the root of the trace
+    of its position block."""
+    return math.sqrt(max(float(np.trace(cov[:2, :2])), 0.0))
+
+
 def ball_in_field(
     relative: FloatArray, relative_cov: FloatArray, pose: FloatArray, pose_cov: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
@@ -206,6 +251,8 @@ class BallFilter:
         self._last_seen_s = -math.inf
         self._time_s: float | None = None
         self._candidate: tuple[FloatArray, FloatArray] | None = None
+        self._unkicked: tuple[FloatArray, FloatArray] | None = None  # our kick left it be
+        self._misses = 0  # frames the belief lay in view since the last fused sighting
 
     def estimate(self, self_pose: SlamEstimate) -> BallEstimate:
         """What the filter believes now, placed on the field from ``self_pose``."""
@@ -228,11 +275,14 @@ class BallFilter:
         odometry: FloatArray,
         self_pose: SlamEstimate,
         kick_velocity: FloatArray | None = None,
+        in_view: Callable[[FloatArray], bool] | None = None,
     ) -> BallEstimate:
         """Roll on to ``time_s`` (s, not before the last update) and move with the robot's
         ``odometry`` (3,) since the last frame; take our own kick since then (``kick_velocity``
         (2,) m/s, robot frame, zero or None for none); fuse this frame's ``sightings`` (robot
-        frame). Returns the estimate placed on the field from ``self_pose``."""
+        frame); lose a ball whose belief grew too uncertain, or lay ``in_view`` (whether a
+        robot-frame point (2,) shows in this frame's image; None: not known) unseen too often
+        (module doc). Returns the estimate placed on the field from ``self_pose``."""
         if not math.isfinite(time_s):
             raise ValueError(f"time_s must be finite, got {time_s}")
         if self._time_s is not None and time_s < self._time_s:
@@ -241,11 +291,14 @@ class BallFilter:
         if odometry.shape != (3,) or not np.isfinite(odometry).all():
             raise ValueError(f"odometry must be 3 finite numbers, got {odometry!r}")
         dt = 0.0 if self._time_s is None else time_s - self._time_s
+        confirmed = self._last_seen_s == self._time_s  # the last frame fused a sighting
         before = (self._state, self._cov)
         if self._known and kick_velocity is not None and np.any(kick_velocity):
             before = self._kicked_by_us(np.asarray(kick_velocity, dtype=np.float64))
         if self._known:
             self._state, self._cov = self._predicted(*before, dt, odometry)
+            if self._unkicked is not None:
+                self._unkicked = self._predicted(*self._unkicked, dt, odometry)
             if self._candidate is not None:
                 self._candidate = self._moved_point(self._candidate, odometry)
         self._time_s = time_s
@@ -254,10 +307,35 @@ class BallFilter:
             for s in sightings
         ]
         if measurements:
-            self._fuse(measurements, time_s, before, dt, odometry)
+            self._fuse(measurements, time_s, before, dt, odometry, confirmed)
         else:
             self._candidate = None  # a candidate needs the very next frame's agreement
+        if self._last_seen_s == time_s:
+            self._misses = 0
+        elif self._known and in_view is not None and self._reliably_in_view(in_view):
+            self._misses += 1
+        c = self.config
+        if self._known and (
+            position_std(self._cov) > c.lost_std_m or self._misses >= c.lost_after_misses
+        ):
+            self._lost()
         return self.estimate(self_pose)
+
+    def _reliably_in_view(self, in_view: Callable[[FloatArray], bool]) -> bool:
+        """Whether the believed ball lies within ``reliable_range_m`` and ``in_view``."""
+        low, high = self.config.reliable_range_m
+        return low <= math.hypot(*self._state[:2]) <= high and in_view(self._state[:2].copy())
+
+    def _lost(self) -> None:
+        """The belief grew too uncertain, or went unseen in view: the ball where our last kick
+        may have left it, if that is still believable; else forgotten until the next sighting
+        (module doc)."""
+        unkicked, self._unkicked, self._candidate = self._unkicked, None, None
+        self._misses = 0
+        if unkicked is not None and position_std(unkicked[1]) <= self.config.lost_std_m:
+            self._state, self._cov = unkicked
+        else:
+            self._known = False
 
     def _kicked_by_us(self, kick_velocity: FloatArray) -> tuple[FloatArray, FloatArray]:
         """The state and covariance of the last frame after our kick of ``kick_velocity`` (2,):
@@ -266,6 +344,7 @@ class BallFilter:
         ahead, aside = self._state[:2]
         if not (0.0 < ahead <= c.own_kick_reach_m and abs(aside) <= c.own_kick_half_width_m):
             return self._state, self._cov
+        self._unkicked = (self._state, self._cov)
         state = np.concatenate([self._state[:2], c.own_kick_rolling_fraction * kick_velocity])
         cov = self._cov.copy()
         cov[2:, :] = 0.0
@@ -299,28 +378,37 @@ class BallFilter:
         before: tuple[FloatArray, FloatArray],
         dt: float,
         odometry: FloatArray,
+        confirmed: bool,
     ) -> None:
         """Fuse the measurement that fits best (module doc); a restart or a candidate else.
-        ``before`` is the state and covariance before this frame's prediction."""
+        ``before`` is the state and covariance before this frame's prediction; ``confirmed``
+        whether the last frame fused a sighting."""
         if not self._known:
             self._start(*measurements[0], time_s)
             return
         best = self._nearest(measurements)
+        if self._unkicked is not None:  # our kick may have left the ball be: the likelier
+            left = self._nearest(measurements, self._unkicked)
+            if left is not None and (best is None or left[1] < best[1]):
+                (self._state, self._cov), best = self._unkicked, left
         if best is None:  # perhaps kicked since the last frame: a velocity jump then
             kicked_cov = before[1].copy()
             kicked_cov[2:, 2:] += self.config.kick_velocity_std_mps**2 * np.eye(2)
-            unkicked = (self._state, self._cov)
+            held = (self._state, self._cov)
             self._state, self._cov = self._predicted(before[0], kicked_cov, dt, odometry)
             best = self._nearest(measurements)
             if best is None:
-                self._state, self._cov = unkicked
+                self._state, self._cov = held
+            elif not confirmed:  # drifted unconfirmed: the sighting outweighs the belief
+                self._start(*best[0], time_s)
+                return
         if best is not None:
-            z, R = best
+            (z, R), _ = best
             self._state, self._cov = joseph_update(
                 self._state, self._cov, z - self._state[:2], _H, R
             )
             self._last_seen_s = time_s
-            self._candidate = None
+            self._candidate = self._unkicked = None
             return
         z, R = measurements[0]
         if self._candidate is not None and self._agrees(self._candidate, (z, R)):
@@ -329,16 +417,21 @@ class BallFilter:
             self._candidate = (z, R)
 
     def _nearest(
-        self, measurements: list[tuple[FloatArray, FloatArray]]
-    ) -> tuple[FloatArray, FloatArray] | None:
-        """The measurement with the least Mahalanobis distance to the prediction, if within the
-        gate."""
-        P = self._cov[:2, :2]
-        distances = [
-            float(mahalanobis_squared(z - self._state[:2], P + R)) for z, R in measurements
-        ]
-        k = int(np.argmin(distances))
-        return measurements[k] if distances[k] <= self._gate else None
+        self,
+        measurements: list[tuple[FloatArray, FloatArray]],
+        belief: tuple[FloatArray, FloatArray] | None = None,
+    ) -> tuple[tuple[FloatArray, FloatArray], float] | None:
+        """The measurement with the least Mahalanobis distance to the prediction ``belief``
+        (state (4,), covariance (4, 4); the filter's own by default), if within the gate; with
+        its negative log-likelihood (up to a constant: ``(d² + log det S) / 2``)."""
+        state, cov = (self._state, self._cov) if belief is None else belief
+        scored = []
+        for z, R in measurements:
+            S = cov[:2, :2] + R
+            d2 = float(mahalanobis_squared(z - state[:2], S))
+            scored.append((d2, 0.5 * (d2 + math.log(np.linalg.det(S)))))
+        k = int(np.argmin([d2 for d2, _ in scored]))
+        return (measurements[k], scored[k][1]) if scored[k][0] <= self._gate else None
 
     def _agrees(self, a: tuple[FloatArray, FloatArray], b: tuple[FloatArray, FloatArray]) -> bool:
         """Whether two robot-frame measurements ``(z, R)`` can show the same resting ball."""
@@ -352,4 +445,4 @@ class BallFilter:
         self._cov[2:, 2:] = self.config.initial_velocity_std_mps**2 * np.eye(2)
         self._known = True
         self._last_seen_s = time_s
-        self._candidate = None
+        self._candidate = self._unkicked = None

@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from perception.geometry import FloatArray
+from perception.geometry import FloatArray, project_points
 from perception.types import BallSighting, CameraModel, CameraState
 from perception.validation import (
     check_in_interval,
@@ -117,6 +117,23 @@ def ball_sightings(
         if sighting is not None:
             found.append(sighting)
     return tuple(sorted(found, key=lambda s: -s.score))
+
+
+def ball_in_view(
+    point: FloatArray, camera: CameraModel, state: CameraState, radius_m: float, margin: float
+) -> bool:
+    """Whether a ball lying at ``point`` (2,) (m, robot frame; its centre ``radius_m`` above
+    the ground) shows in the image of ``camera`` taken from ``state``, at least ``margin`` (a
+    share of the image's width and height) inside its edges."""
+    centre = np.array([point[0], point[1], radius_m]) - state.position
+    pixel, front = project_points(
+        state.rotation().T @ centre, camera.fx, camera.fy, camera.cx, camera.cy
+    )
+    if not front[0]:
+        return False
+    u, v = pixel[0]
+    du, dv = margin * camera.width, margin * camera.height
+    return bool(du <= u <= camera.width - du and dv <= v <= camera.height - dv)
 
 
 def _box_sighting(

@@ -7,6 +7,7 @@ representation, included when the pipeline computes it.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -178,16 +179,18 @@ def odometry_info(step: OdometryStep, layout: InfoLayout) -> dict[str, Any]:
 def ball_info(ball: BallEstimate, layout: InfoLayout) -> dict[str, Any]:
     """The believed ball (field frame): ``ball`` (2,) position (m), ``ball_velocity`` (2,)
     (m/s), ``ball_cov`` (4, 4) over both, ``ball_relative`` (2,) its position in our robot's
-    frame (m; the filter's own estimate, free of the pose's error), ``ball_known`` (seen at
-    least once this episode) and ``ball_last_seen_s`` (s; -1 before the first sighting: -inf
-    would not survive JSON)."""
+    frame (m; the filter's own estimate, free of the pose's error), ``ball_known`` (a ball is
+    believed: seen, and not lost since) and ``ball_last_seen_s`` (s; -1 before the first
+    sighting: -inf would not survive JSON)."""
     return {
         "ball": ball.state[:2].copy(),
         "ball_relative": ball.relative[:2].copy(),
         "ball_velocity": ball.state[2:].copy(),
         "ball_cov": ball.cov.copy(),
         "ball_known": np.bool_(ball.known),
-        "ball_last_seen_s": np.float64(ball.last_seen_s if ball.known else -1.0),
+        "ball_last_seen_s": np.float64(
+            ball.last_seen_s if math.isfinite(ball.last_seen_s) else -1.0
+        ),
     }
 
 

@@ -46,8 +46,9 @@ _PERCEPTION_DOC = """
     ``self_pose_std`` (3,), ``head_angles`` (2,) (as ``SPL/ActiveVision-v0``), ``ball_bearing``
     (2,) cos and sin from the believed pose, ``ball_range`` (1,) r / (r + 3 m),
     ``ball_velocity`` (2,) robot frame v / (|v| + 0.3 m/s), ``ball_std`` (1,) s / (s + 0.5 m),
-    ``ball_since_seen`` (1,) t / (t + 2 s) (1 before the first sighting), the ``robots_*`` keys
-    of ``SPL/ActiveVision-v1`` (K rows) and ``time_fraction`` (1,).
+    ``ball_since_seen`` (1,) t / (t + 2 s) (1 while no ball is believed: not seen yet, or
+    lost), the ``robots_*`` keys of ``SPL/ActiveVision-v1`` (K rows) and ``time_fraction``
+    (1,).
 
     **info**: ``reward_terms``; at ``info_level="full"`` also ``perception`` (the pose, pole
     sightings, the tracked robots, and the believed ball: ``ball`` (2,), ``ball_velocity`` (2,),

@@ -10,13 +10,14 @@ from gymnasium import spaces
 
 from perception.geometry import FloatArray
 from perception.representations import BALL
+from perception.tracking.ball_filter import position_std
 from perception.types import BallEstimate
 from spl_env.observations.base import EncoderInput, box, squash
 from spl_env.observations.poles import RANGE_SCALE_M, SINCE_SEEN_SCALE_S
 from spl_env.observations.robots import SPEED_SCALE_MPS
 from spl_env.observations.self_pose import STD_SCALE_M
 
-UNSEEN_SINCE = 1.0  # ``ball_since_seen`` of a ball never seen this episode
+UNSEEN_SINCE = 1.0  # ``ball_since_seen`` while no ball is believed (unseen yet, or lost)
 
 
 @dataclass(frozen=True)
@@ -26,8 +27,8 @@ class BallEncoder:
     ``ball_bearing`` (2,) cos and sin of its bearing, ``ball_range`` (1,) r / (r + 3 m),
     ``ball_velocity`` (2,) each robot-frame component v / (|v| + 0.3 m/s), ``ball_std`` (1,)
     s / (s + 0.5 m) with s = sqrt(trace of its position covariance), ``ball_since_seen`` (1,)
-    t / (t + 2 s). Before the ball was first seen: bearing (1, 0), range, velocity 0, std and
-    since-seen 1.
+    t / (t + 2 s). While no ball is believed (before its first sighting, or once the filter lost
+    it): bearing (1, 0), range, velocity 0, std and since-seen 1.
     """
 
     requires: tuple[str, ...] = (BALL,)
@@ -54,7 +55,7 @@ class BallEncoder:
         x, y, vx, vy = ball.relative
         range_m, bearing = math.hypot(x, y), math.atan2(y, x)
         velocity = np.array([vx, vy])
-        std = float(np.sqrt(max(np.trace(ball.relative_cov[:2, :2]), 0.0)))
+        std = position_std(ball.relative_cov)
         since = max(data.output.time_s - ball.last_seen_s, 0.0)
         return {
             "ball_bearing": np.array([np.cos(bearing), np.sin(bearing)]),

@@ -410,6 +410,182 @@ def test_our_own_kick_sets_the_velocity_of_a_ball_within_reach() -> None:
         np.testing.assert_allclose(estimate.relative, [distance, 0, 0, 0], atol=1e-15)
 
 
+def kalman_step(x: FloatArray, P: FloatArray, z: FloatArray, R: FloatArray) -> FloatArray:
+    """The state (4,) after fusing a position measurement ``z`` (2,) with noise ``R`` (2, 2) into
+    ``x`` (4,) with covariance ``P`` (4, 4): the textbook gain."""
+    H = np.hstack([np.eye(2), np.zeros((2, 2))])
+    K = P @ H.T @ np.linalg.inv(H @ P @ H.T + R)
+    return x + K @ (z - H @ x)
+
+
+def test_a_kick_that_left_the_ball_where_it_was_is_undone_by_the_next_sighting() -> None:
+    """Our kick of a resting ball 0.2 m ahead, then no sighting (the belief rolls off at the
+    kick's speed), then the ball seen where it was: the sighting is fused into the belief
+    without the kick (a Kalman step from two frames of rest), not read as a second kick."""
+    config, pose = EXACT_STEP, [0.0, 0.0, 0.0]
+    ball_filter, t = steady_filter(pose, [0.2, 0.0])
+    steady = ball_filter.estimate(self_pose(pose))
+    kicked = ball_filter.update(t + DT, [], STILL, self_pose(pose), kick_velocity=[2.0, 0.0])
+    assert kicked.relative[2] > 1.0  # the belief took the kick
+    seen = observe(pose, [0.2, 0.0])
+    estimate = ball_filter.update(t + 2 * DT, [seen], STILL, self_pose(pose))
+    assert estimate.last_seen_s == t + 2 * DT
+    F, Q = cv_transition(DT), white_acceleration_q(config.acceleration_psd, DT)
+    P = F @ (F @ steady.relative_cov @ F.T + Q) @ F.T + Q
+    z = np.array(
+        [seen.range_m * math.cos(seen.bearing_rad), seen.range_m * math.sin(seen.bearing_rad)]
+    )
+    J = polar_jacobian(0.0, seen.range_m, seen.bearing_rad)
+    expected = kalman_step(steady.relative, P, z, J @ COV @ J.T)
+    np.testing.assert_allclose(estimate.relative, expected, atol=1e-9)
+    assert np.hypot(*estimate.relative[2:]) < 0.05
+
+
+def test_a_kick_seen_rolling_is_kept_and_the_ball_left_behind_forgotten() -> None:
+    """Our kick of a ball 0.2 m ahead, seen rolling at the kick's speed the next frame: fused
+    into the kicked belief, and the belief without the kick dropped (when the kicked belief is
+    lost, nothing is left)."""
+    pose = [0.0, 0.0, 0.0]
+    ball_filter, t = steady_filter(pose, [0.2, 0.0])
+    ball_filter.update(t + DT, [], STILL, self_pose(pose), kick_velocity=[2.0, 0.0])
+    rolled_to = 0.2 + 2 * 0.71 * 2.0 * DT  # two frames at the kick's rolling speed
+    estimate = ball_filter.update(
+        t + 2 * DT, [observe(pose, [rolled_to, 0.0])], STILL, self_pose(pose)
+    )
+    assert estimate.last_seen_s == t + 2 * DT and estimate.relative[2] > 1.0
+    for k in range(3, 200):
+        estimate = ball_filter.update(t + k * DT, [], STILL, self_pose(pose))
+        if not estimate.known:
+            break
+        assert estimate.relative[2] > 1.0, k  # rolling on to the end
+    assert not estimate.known
+
+
+def lost_after(config: BallFilterConfig, cov: FloatArray) -> int:
+    """The first frame (1, 2, ...) without sightings after which a resting ball's covariance
+    ``cov`` (4, 4) has a position std over ``config.lost_std_m`` (constant-velocity steps)."""
+    F, Q = cv_transition(DT), white_acceleration_q(config.acceleration_psd, DT)
+    for k in range(1, 1000):
+        cov = F @ cov @ F.T + Q
+        if math.sqrt(np.trace(cov[:2, :2])) > config.lost_std_m:
+            return k
+    raise AssertionError("never lost")
+
+
+@pytest.mark.parametrize("lost_std_m", [0.3, 1.0])
+def test_a_ball_unseen_is_lost_once_its_position_std_passes_lost_std_m(lost_std_m: float) -> None:
+    """A resting ball seen five frames, then none: believed (at rest, where it was) up to the
+    frame whose predicted position std passes ``lost_std_m`` (worked out with the
+    constant-velocity covariance step), forgotten from that frame on (last_seen_s kept); the
+    next sighting, anywhere, starts the filter afresh there."""
+    config = BallFilterConfig(odometry_turn_std_floor_rad=0.0, lost_std_m=lost_std_m)
+    pose, ball = [0.0, 0.0, 0.0], [2.0, 0.5]
+    ball_filter = BallFilter(config)
+    for k in range(5):
+        ball_filter.update(k * DT, [observe(pose, ball)], STILL, self_pose(pose))
+    t = 4 * DT
+    k_lost = lost_after(config, ball_filter.estimate(self_pose(pose)).relative_cov)
+    for k in range(1, k_lost + 1):
+        estimate = ball_filter.update(t + k * DT, [], STILL, self_pose(pose))
+        assert estimate.known == (k < k_lost), k
+        assert estimate.last_seen_s == t
+    np.testing.assert_array_equal(estimate.state, np.zeros(4))
+    far = [0.5, -1.0]
+    estimate = ball_filter.update(
+        t + (k_lost + 1) * DT, [observe(pose, far)], STILL, self_pose(pose)
+    )
+    assert estimate.known and estimate.last_seen_s == t + (k_lost + 1) * DT
+    np.testing.assert_allclose(estimate.state, [*far, 0.0, 0.0], atol=1e-12)
+
+
+def test_a_kicked_belief_lost_falls_back_to_the_ball_left_where_it_was() -> None:
+    """Our kick of a ball 0.2 m ahead and nothing seen after: the kicked belief (velocity std
+    0.3 m/s) is lost first; the filter then believes the ball where it was, at rest, until
+    that belief is lost too."""
+    pose = [0.0, 0.0, 0.0]
+    ball_filter, t = steady_filter(pose, [0.2, 0.0])
+    ball_filter.update(t + DT, [], STILL, self_pose(pose), kick_velocity=[2.0, 0.0])
+    states = []
+    for k in range(2, 200):
+        estimate = ball_filter.update(t + k * DT, [], STILL, self_pose(pose))
+        if not estimate.known:
+            break
+        states.append(estimate.relative.copy())
+    speeds = np.hypot(np.array(states)[:, 2], np.array(states)[:, 3])
+    fell_back = int(np.argmax(speeds < 0.5))
+    assert 0 < fell_back < len(states) - 1  # rolling first, then the ball left behind
+    assert np.all(speeds[:fell_back] > 1.0) and np.all(speeds[fell_back:] < 1e-9)
+    np.testing.assert_allclose(
+        np.array(states)[fell_back:, :2], [[0.2, 0.0]] * (len(states) - fell_back), atol=1e-9
+    )
+
+
+def always(point: FloatArray) -> bool:
+    return True
+
+
+def never(point: FloatArray) -> bool:
+    return False
+
+
+def test_a_ball_in_view_but_unseen_is_lost_after_lost_after_misses_frames() -> None:
+    """A resting ball believed 2 m ahead: in view without a sighting, lost on the third frame
+    (the default lost_after_misses) since its last fused sighting, whether or not the misses
+    are in a row; out of view (or view unknown) it stays believed; a fused sighting starts the
+    count again."""
+    pose = [0.0, 0.0, 0.0]
+    for views in ([always] * 3, [always, never, always, None, always]):
+        ball_filter, t = steady_filter(pose, [2.0, 0.0])
+        for k, in_view in enumerate(views, start=1):
+            estimate = ball_filter.update(t + k * DT, [], STILL, self_pose(pose), in_view=in_view)
+            assert estimate.known == (k < len(views)), (views, k)
+    ball_filter, t = steady_filter(pose, [2.0, 0.0])
+    frames = [[], [], [observe(pose, [2.0, 0.0])], [], []]
+    for k, seen in enumerate(frames, start=1):
+        estimate = ball_filter.update(t + k * DT, seen, STILL, self_pose(pose), in_view=always)
+        assert estimate.known, k
+
+
+def test_a_ball_outside_the_reliable_range_is_not_lost_by_misses() -> None:
+    """Believed 0.4 m and 3.5 m away (outside the default reliable_range_m of 0.6-3 m), in
+    view and unseen for ten frames: still believed."""
+    pose = [0.0, 0.0, 0.0]
+    for ball in ([0.4, 0.0], [3.5, 0.0]):
+        ball_filter, t = steady_filter(pose, ball)
+        for k in range(1, 11):
+            estimate = ball_filter.update(t + k * DT, [], STILL, self_pose(pose), in_view=always)
+        assert estimate.known, ball
+
+
+def test_a_kicked_belief_in_view_unseen_falls_back_to_the_ball_left_behind() -> None:
+    """Our kick of a ball 0.2 m ahead; the camera would see anything 0.5 m or more ahead, and
+    nothing is seen: the kicked belief rolls past 0.6 m and is lost three frames later; the
+    filter then believes the ball where it was, at rest (too near to be missed in view)."""
+    pose = [0.0, 0.0, 0.0]
+
+    def ahead(point: FloatArray) -> bool:
+        return bool(point[0] >= 0.5)
+
+    ball_filter, t = steady_filter(pose, [0.2, 0.0])
+    estimate = ball_filter.update(t + DT, [], STILL, self_pose(pose), [2.0, 0.0], in_view=ahead)
+    k = 1
+    while estimate.relative[0] < 0.6:  # rolling into the reliable range: the first miss
+        k += 1
+        estimate = ball_filter.update(t + k * DT, [], STILL, self_pose(pose), in_view=ahead)
+    for miss in (2, 3):
+        estimate = ball_filter.update(
+            t + (k + miss - 1) * DT, [], STILL, self_pose(pose), in_view=ahead
+        )
+        assert estimate.known
+        assert (estimate.relative[2] > 1.0) == (miss < 3), miss
+    np.testing.assert_allclose(estimate.relative[:2], [0.2, 0.0], atol=1e-9)
+    for more in range(1, 6):
+        estimate = ball_filter.update(
+            t + (k + 2 + more) * DT, [], STILL, self_pose(pose), in_view=ahead
+        )
+        assert estimate.known
+
+
 # --- BallFilter: simulated balls ----------------------------------------------------------------
 
 
@@ -594,6 +770,30 @@ def test_two_agreeing_far_off_sightings_in_a_row_restart_the_filter_there() -> N
     assert np.linalg.norm(estimate.state[:2] - moved) < 0.02
 
 
+def test_a_jump_after_a_fused_frame_is_a_kick_after_an_unfused_one_a_restart() -> None:
+    """A resting ball 2 m ahead, then seen 0.3 m to the left (outside the gate, inside the
+    kicked gate): right after a fused frame the sighting is fused as a kick (last_seen_s, a
+    velocity over 1 m/s to the left); one frame later than that (the last frame fused nothing)
+    the filter restarts at the sighting: at rest, the sighting's covariance, the initial
+    velocity std."""
+    pose, ball, moved = [0.0, 0.0, 0.0], [2.0, 0.0], [2.0, 0.3]
+    config = EXACT_STEP
+    ball_filter, t = steady_filter(pose, ball)
+    estimate = ball_filter.update(t + DT, [observe(pose, moved)], STILL, self_pose(pose))
+    assert estimate.last_seen_s == t + DT and estimate.relative[3] > 1.0
+    ball_filter, t = steady_filter(pose, ball)
+    ball_filter.update(t + DT, [], STILL, self_pose(pose))
+    seen = observe(pose, moved)
+    estimate = ball_filter.update(t + 2 * DT, [seen], STILL, self_pose(pose))
+    assert estimate.last_seen_s == t + 2 * DT
+    np.testing.assert_allclose(estimate.relative, [*moved, 0.0, 0.0], atol=1e-12)
+    J = polar_jacobian(0.0, seen.range_m, seen.bearing_rad)
+    expected = np.zeros((4, 4))
+    expected[:2, :2] = J @ COV @ J.T
+    expected[2:, 2:] = config.initial_velocity_std_mps**2 * np.eye(2)
+    np.testing.assert_allclose(estimate.relative_cov, expected, rtol=1e-12, atol=1e-16)
+
+
 def test_a_far_off_sighting_between_true_ones_or_disagreeing_ones_restart_nothing() -> None:
     pose, ball = [0.0, 0.0, 0.0], [2.0, 0.0]
     ball_filter, t = steady_filter(pose, ball)
@@ -663,6 +863,12 @@ def test_reset_forgets_the_ball_the_time_and_the_candidate() -> None:
         ("acceleration_psd", 0.0),
         ("initial_velocity_std_mps", 0.0),
         ("kick_velocity_std_mps", -1.0),
+        ("lost_std_m", 0.0),
+        ("lost_std_m", math.nan),
+        ("lost_after_misses", 0),
+        ("reliable_range_m", (3.0, 0.6)),
+        ("reliable_range_m", (-0.1, 3.0)),
+        ("view_margin", 0.5),
         ("gate_probability", 1.0),
         ("gate_probability", 0.0),
         ("odometry_translation_std_fraction", -0.1),

@@ -162,7 +162,7 @@ def test_a_robot_that_cannot_kick_still_tracks_the_ball() -> None:
 
 
 def test_tracked_ball_refuses_a_self_pose_or_odometry_of_the_wrong_type() -> None:
-    provider = TrackedBall(BallFilterConfig())
+    provider = TrackedBall(BallFilterConfig(), 0.05)
     provider.reset(Prior(pose=POSE, rng=np.random.default_rng(0)))
     step = OdometryStep(delta=np.zeros(3), walk_delta=np.zeros(3))
     good = {
@@ -170,6 +170,8 @@ def test_tracked_ball_refuses_a_self_pose_or_odometry_of_the_wrong_type() -> Non
         ODOMETRY: step,
         SELF_POSE: slam_estimate(),
         "kick_velocity": NO_KICK,
+        "camera": CAMERA,
+        "camera_state": STATE,
     }
     assert not provider.update(good, 0.0).known
     with pytest.raises(TypeError, match="self_pose"):
@@ -351,7 +353,7 @@ def test_the_filter_on_oracle_sightings_finds_the_resting_ball() -> None:
         outputs=[BALL],
     )
     assert pipeline.frame_inputs == frozenset(
-        {"truth", "camera_state", "odometry_delta", "kick_velocity"}
+        {"truth", "camera", "camera_state", "odometry_delta", "kick_velocity"}
     )
     pipeline.reset(POSE, np.random.default_rng(4))
     truth = truth_with_ball(2.0, 5.0, velocity=(0.0, 0.0))
@@ -359,6 +361,7 @@ def test_the_filter_on_oracle_sightings_finds_the_resting_ball() -> None:
         frame = SensorFrame(
             time_s=0.1 * k,
             odometry_delta=np.zeros(3),
+            camera=CAMERA,
             camera_state=camera(0.0),
             kick_velocity=NO_KICK,
             truth=truth,

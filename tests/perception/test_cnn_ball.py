@@ -17,7 +17,7 @@ import pytest
 from perception.geometry import FloatArray, project_points, wrap_angle
 from perception.types import CameraModel, CameraState
 from perception.validation import InvalidTypeError
-from perception.vision.cnn_ball import BALL_CLASS, CnnBallConfig, ball_sightings
+from perception.vision.cnn_ball import BALL_CLASS, CnnBallConfig, ball_in_view, ball_sightings
 from perception.vision.cnn_detector import OBJECT_CLASSES, Detection
 
 CAMERA = CameraModel()
@@ -294,3 +294,42 @@ def test_config_defaults() -> None:
     )
     with pytest.raises(dataclasses.FrozenInstanceError):
         config.radius_m = 0.1  # type: ignore[misc]
+
+
+# --- ball_in_view -------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("margin", [0.0, 0.1, 0.3])
+def test_a_ball_is_in_view_within_the_field_of_view_less_the_margin(margin: float) -> None:
+    """A level camera (pitch 0) at the height of the ball's centre: a ball at horizontal angle a
+    is in view iff tan|a| <= tan(hfov / 2) (1 - 2 margin) (by hand: the image's half-width in
+    the focal plane), vertically alike with the vertical FOV; never behind the camera."""
+    radius = 0.05
+    state = CameraState(position=np.array([0.0, 0.0, radius]), head_yaw=0.0, head_pitch=0.0)
+    half_h = math.atan(math.tan(math.radians(CAMERA.hfov_deg) / 2) * (1 - 2 * margin))
+    for angle, inside in ((half_h - 1e-3, True), (half_h + 1e-3, False)):
+        for sign in (1.0, -1.0):
+            point = 2.0 * np.array([1.0, sign * math.tan(angle)])
+            assert ball_in_view(point, CAMERA, state, radius, margin) == inside, (angle, sign)
+    # a camera lower than the ball's centre by 2 tan(a): the ball sits at vertical angle a
+    half_v = math.atan(math.tan(math.radians(CAMERA.vfov_deg) / 2) * (1 - 2 * margin))
+    for angle, inside in ((half_v - 1e-3, True), (half_v + 1e-3, False)):
+        for sign in (1.0, -1.0):
+            low = CameraState(
+                position=np.array([0.0, 0.0, radius - sign * 2.0 * math.tan(angle)]),
+                head_yaw=0.0,
+                head_pitch=0.0,
+            )
+            assert ball_in_view(np.array([2.0, 0.0]), CAMERA, low, radius, margin) == inside
+    assert not ball_in_view(np.array([-2.0, 0.0]), CAMERA, state, radius, margin)
+
+
+def test_a_ball_is_in_view_where_the_head_turns() -> None:
+    """A ball 60 degrees to the left is out of view of a head looking ahead, in view of one
+    turned 60 degrees left (projected at the image's centre column)."""
+    radius = 0.05
+    point = 2.0 * np.array([math.cos(math.radians(60)), math.sin(math.radians(60))])
+    ahead = CameraState(position=np.array([0.0, 0.0, 0.5]), head_yaw=0.0, head_pitch=0.2)
+    turned = dataclasses.replace(ahead, head_yaw=math.radians(60))
+    assert not ball_in_view(point, CAMERA, ahead, radius, 0.1)
+    assert ball_in_view(point, CAMERA, turned, radius, 0.1)
