@@ -41,9 +41,9 @@ robot rolls on only in the belief): once its position std (the root of the trace
 position covariance) exceeds ``lost_std_m``, the ball is lost. The filter forgets it (``known``
 False, as before the first sighting; ``last_seen_s`` kept) and the next sighting starts it
 afresh, so that nobody walks after a belief that has nothing left to do with the ball. So it is
-when the belief lay where the camera would have seen it (``in_view``, within
-``reliable_range_m``) in ``lost_after_misses`` frames since its last fused sighting, and the
-ball was not seen there.
+when the belief lay where the camera would have seen it (``in_view``) in frames since its last
+fused sighting that would all have missed a ball there with a chance under ``lost_chance``
+(each frame's chance to see it from ``detection_chance`` at the believed range).
 
 Our own kicks are known to the robot's motion: a kick's intended velocity (robot frame) given to
 a ball believed in front of the feet (``own_kick_reach_m`` ahead, ``own_kick_half_width_m`` to
@@ -71,7 +71,6 @@ from perception.tracking.robot_tracker import sighting_in_field
 from perception.types import BallEstimate, BallSighting, SlamEstimate
 from perception.validation import (
     check_in_interval,
-    check_int,
     check_positive,
     check_probability,
 )
@@ -97,10 +96,18 @@ class BallFilterConfig:
     # A belief whose position std (m, root of the trace of the position covariance) exceeds
     # this is dropped: the ball is lost. A ball at rest, unseen, gets there after about 3 s.
     lost_std_m: float = 1.0
-    # ... and so is one that lay in view, within reliable_range_m (m; where the top camera
-    # finds 80-90 % of the balls), in this many frames since its last fused sighting
-    lost_after_misses: int = 3
-    reliable_range_m: tuple[float, float] = (0.6, 3.0)
+    # ... and so is one that lay in view in frames since its last fused sighting that would
+    # all have missed a ball there with a chance under lost_chance. The chance that the top
+    # camera finds a ball in view, by range: (upper bound (m), chance) in ascending order, 0
+    # beyond the last (ball_detection_top.json, tuning seeds 0-4: 71 / 80 / 86 % at 0-1 / 1-2
+    # / 2-3 m; nearer than 0.6 m the ball leaves the image's bottom).
+    detection_chance: tuple[tuple[float, float], ...] = (
+        (0.6, 0.0),
+        (1.0, 0.7),
+        (2.0, 0.8),
+        (3.0, 0.86),
+    )
+    lost_chance: float = 0.01
     view_margin: float = 0.1  # in view: this share of the image's size inside its edges
     # The walk odometry's noise as the filter takes it (a share of each step's distance and
     # turn, and a floor on the turn's std per frame)
@@ -136,14 +143,23 @@ class BallFilterConfig:
         ):
             check_positive(_OWNER, name, getattr(self, name), allow_zero=True)
         check_probability(_OWNER, "gate_probability", self.gate_probability, float_only=True)
-        check_int(_OWNER, "lost_after_misses", self.lost_after_misses, 1)
-        check_in_interval(_OWNER, "view_margin", self.view_margin, 0.0, 0.5)
-        low, high = self.reliable_range_m
-        check_positive(_OWNER, "reliable_range_m[0]", low, allow_zero=True)
-        if not low < high:
+        check_in_interval(_OWNER, "view_margin", self.view_margin, 0.0, 0.5, low_inclusive=True)
+        check_probability(_OWNER, "lost_chance", self.lost_chance, float_only=True)
+        bounds = [bound for bound, _ in self.detection_chance]
+        if not bounds or bounds != sorted(set(bounds)) or bounds[0] <= 0:
             raise ValueError(
-                f"{_OWNER}.reliable_range_m must be (low, high) with low < high, got "
-                f"{self.reliable_range_m}"
+                f"{_OWNER}.detection_chance must be (upper bound, chance) pairs with positive "
+                f"ascending bounds, got {self.detection_chance}"
+            )
+        for k, (_, chance) in enumerate(self.detection_chance):
+            check_in_interval(
+                _OWNER,
+                f"detection_chance[{k}][1]",
+                chance,
+                0.0,
+                1.0,
+                low_inclusive=True,
+                high_inclusive=True,
             )
         check_in_interval(
             _OWNER,
@@ -153,6 +169,13 @@ class BallFilterConfig:
             1.0,
             high_inclusive=True,
         )
+
+    def chance_to_see(self, range_m: float) -> float:
+        """The chance (``detection_chance``) that a ball in view at ``range_m`` (m) is seen."""
+        for bound, chance in self.detection_chance:
+            if range_m <= bound:
+                return chance
+        return 0.0
 
     @property
     def gate_threshold(self) -> float:
@@ -252,7 +275,7 @@ class BallFilter:
         self._time_s: float | None = None
         self._candidate: tuple[FloatArray, FloatArray] | None = None
         self._unkicked: tuple[FloatArray, FloatArray] | None = None  # our kick left it be
-        self._misses = 0  # frames the belief lay in view since the last fused sighting
+        self._unseen_chance = 1.0  # that a ball where believed was missed since last seen
 
     def estimate(self, self_pose: SlamEstimate) -> BallEstimate:
         """What the filter believes now, placed on the field from ``self_pose``."""
@@ -311,27 +334,23 @@ class BallFilter:
         else:
             self._candidate = None  # a candidate needs the very next frame's agreement
         if self._last_seen_s == time_s:
-            self._misses = 0
-        elif self._known and in_view is not None and self._reliably_in_view(in_view):
-            self._misses += 1
+            self._unseen_chance = 1.0
+        elif self._known and in_view is not None and in_view(self._state[:2].copy()):
+            range_m = math.hypot(*self._state[:2])
+            self._unseen_chance *= 1.0 - self.config.chance_to_see(range_m)
         c = self.config
         if self._known and (
-            position_std(self._cov) > c.lost_std_m or self._misses >= c.lost_after_misses
+            position_std(self._cov) > c.lost_std_m or self._unseen_chance < c.lost_chance
         ):
             self._lost()
         return self.estimate(self_pose)
-
-    def _reliably_in_view(self, in_view: Callable[[FloatArray], bool]) -> bool:
-        """Whether the believed ball lies within ``reliable_range_m`` and ``in_view``."""
-        low, high = self.config.reliable_range_m
-        return low <= math.hypot(*self._state[:2]) <= high and in_view(self._state[:2].copy())
 
     def _lost(self) -> None:
         """The belief grew too uncertain, or went unseen in view: the ball where our last kick
         may have left it, if that is still believable; else forgotten until the next sighting
         (module doc)."""
         unkicked, self._unkicked, self._candidate = self._unkicked, None, None
-        self._misses = 0
+        self._unseen_chance = 1.0
         if unkicked is not None and position_std(unkicked[1]) <= self.config.lost_std_m:
             self._state, self._cov = unkicked
         else:

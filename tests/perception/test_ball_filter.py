@@ -6,6 +6,7 @@ robot with chi-square bands on the NEES, and the gate's candidate restart."""
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from collections.abc import Sequence
@@ -528,12 +529,13 @@ def never(point: FloatArray) -> bool:
     return False
 
 
-def test_a_ball_in_view_but_unseen_is_lost_after_lost_after_misses_frames() -> None:
-    """A resting ball believed 2 m ahead: in view without a sighting, lost on the third frame
-    (the default lost_after_misses) since its last fused sighting, whether or not the misses
-    are in a row; out of view (or view unknown) it stays believed; a fused sighting starts the
-    count again."""
+def test_a_ball_in_view_but_unseen_is_lost_once_missing_it_each_time_is_unlikely() -> None:
+    """A resting ball believed 2 m ahead (the default chance to see it there 0.8): in view
+    without a sighting, lost on the third such frame since its last fused sighting (0.2³ < 0.01
+    <= 0.2²), whether or not those frames are in a row; out of view (or view unknown) it stays
+    believed; a fused sighting starts the count again."""
     pose = [0.0, 0.0, 0.0]
+    assert BallFilterConfig().chance_to_see(2.0) == 0.8
     for views in ([always] * 3, [always, never, always, None, always]):
         ball_filter, t = steady_filter(pose, [2.0, 0.0])
         for k, in_view in enumerate(views, start=1):
@@ -546,9 +548,19 @@ def test_a_ball_in_view_but_unseen_is_lost_after_lost_after_misses_frames() -> N
         assert estimate.known, k
 
 
-def test_a_ball_outside_the_reliable_range_is_not_lost_by_misses() -> None:
-    """Believed 0.4 m and 3.5 m away (outside the default reliable_range_m of 0.6-3 m), in
-    view and unseen for ten frames: still believed."""
+@pytest.mark.parametrize(
+    ("range_m", "chance"),
+    [(0.3, 0.0), (0.6, 0.0), (0.61, 0.7), (1.0, 0.7), (1.5, 0.8), (2.5, 0.86), (3.01, 0.0)],
+)
+def test_the_chance_to_see_a_ball_in_view_is_its_range_band_s(
+    range_m: float, chance: float
+) -> None:
+    assert BallFilterConfig().chance_to_see(range_m) == chance
+
+
+def test_a_ball_where_the_camera_cannot_find_it_is_not_lost_by_misses() -> None:
+    """Believed 0.4 m and 3.5 m away (a chance of 0 to see it there), in view and unseen for
+    ten frames: still believed."""
     pose = [0.0, 0.0, 0.0]
     for ball in ([0.4, 0.0], [3.5, 0.0]):
         ball_filter, t = steady_filter(pose, ball)
@@ -558,18 +570,23 @@ def test_a_ball_outside_the_reliable_range_is_not_lost_by_misses() -> None:
 
 
 def test_a_kicked_belief_in_view_unseen_falls_back_to_the_ball_left_behind() -> None:
-    """Our kick of a ball 0.2 m ahead; the camera would see anything 0.5 m or more ahead, and
-    nothing is seen: the kicked belief rolls past 0.6 m and is lost three frames later; the
-    filter then believes the ball where it was, at rest (too near to be missed in view)."""
+    """Our kick of a ball 0.2 m ahead; the camera would see anything 0.5 m or more ahead with
+    a chance of 0.85, and nothing is seen: the kicked belief is lost on its third frame in
+    view (0.15³ < 0.01 <= 0.15²); the filter then believes the ball where it was, at rest, which it
+    keeps (out of view)."""
+    config = dataclasses.replace(EXACT_STEP, detection_chance=((10.0, 0.85),))
     pose = [0.0, 0.0, 0.0]
 
     def ahead(point: FloatArray) -> bool:
         return bool(point[0] >= 0.5)
 
-    ball_filter, t = steady_filter(pose, [0.2, 0.0])
+    ball_filter = BallFilter(config)
+    for k in range(5):
+        ball_filter.update(k * DT, [observe(pose, [0.2, 0.0])], STILL, self_pose(pose))
+    t = 4 * DT
     estimate = ball_filter.update(t + DT, [], STILL, self_pose(pose), [2.0, 0.0], in_view=ahead)
     k = 1
-    while estimate.relative[0] < 0.6:  # rolling into the reliable range: the first miss
+    while estimate.relative[0] < 0.5:  # rolling into view: the first miss
         k += 1
         estimate = ball_filter.update(t + k * DT, [], STILL, self_pose(pose), in_view=ahead)
     for miss in (2, 3):
@@ -865,9 +882,12 @@ def test_reset_forgets_the_ball_the_time_and_the_candidate() -> None:
         ("kick_velocity_std_mps", -1.0),
         ("lost_std_m", 0.0),
         ("lost_std_m", math.nan),
-        ("lost_after_misses", 0),
-        ("reliable_range_m", (3.0, 0.6)),
-        ("reliable_range_m", (-0.1, 3.0)),
+        ("lost_chance", 0.0),
+        ("lost_chance", 1.0),
+        ("detection_chance", ()),
+        ("detection_chance", ((1.0, 0.5), (0.5, 0.5))),
+        ("detection_chance", ((0.0, 0.5),)),
+        ("detection_chance", ((1.0, 1.5),)),
         ("view_margin", 0.5),
         ("gate_probability", 1.0),
         ("gate_probability", 0.0),
