@@ -43,7 +43,9 @@ False, as before the first sighting; ``last_seen_s`` kept) and the next sighting
 afresh, so that nobody walks after a belief that has nothing left to do with the ball. So it is
 when the belief lay where the camera would have seen it (``in_view``) in frames since its last
 fused sighting that would all have missed a ball there with a chance under ``lost_chance``
-(each frame's chance to see it from ``detection_chance`` at the believed range).
+(each frame's chance to see it from ``detection_chance`` at the believed range). The test takes
+the belief's mean for the ball and the frames' misses as independent: a ball hidden behind a
+robot, missed frame after frame, is lost as soon as one in the open would be.
 
 Our own kicks are known to the robot's motion: a kick's intended velocity (robot frame) given to
 a ball believed in front of the feet (``own_kick_reach_m`` ahead, ``own_kick_half_width_m`` to
@@ -53,7 +55,10 @@ forgetting the velocity's correlations. A kick may also leave the ball where it 
 a robot behind it, or the ball not quite in the kick zone), so the belief without the kick is
 kept beside it, predicted alike, until a sighting is fused: a sighting is fused into whichever
 of the two gives it the higher likelihood, and when the kicked belief is lost the ball is
-believed where it was, if that belief is not lost too.
+believed where it was, if that belief's position std is still under ``lost_std_m`` (its own
+misses in view are not counted: it lies at our feet, where the top camera cannot see). A
+second kick before a sighting keeps only its own belief without the kick (the first kick's
+kicked belief).
 """
 
 from __future__ import annotations
@@ -108,7 +113,8 @@ class BallFilterConfig:
         (3.0, 0.86),
     )
     lost_chance: float = 0.01
-    view_margin: float = 0.1  # in view: this share of the image's size inside its edges
+    # in view (the provider's in_view): this share of the image's size inside its edges
+    view_margin: float = 0.1
     # The walk odometry's noise as the filter takes it (a share of each step's distance and
     # turn, and a floor on the turn's std per frame)
     odometry_translation_std_fraction: float = 0.1
@@ -145,8 +151,17 @@ class BallFilterConfig:
         check_probability(_OWNER, "gate_probability", self.gate_probability, float_only=True)
         check_in_interval(_OWNER, "view_margin", self.view_margin, 0.0, 0.5, low_inclusive=True)
         check_probability(_OWNER, "lost_chance", self.lost_chance, float_only=True)
-        bounds = [bound for bound, _ in self.detection_chance]
-        if not bounds or bounds != sorted(set(bounds)) or bounds[0] <= 0:
+        pairs = self.detection_chance
+        if not isinstance(pairs, tuple) or not all(
+            isinstance(pair, tuple) and len(pair) == 2 for pair in pairs
+        ):
+            raise TypeError(
+                f"{_OWNER}.detection_chance must be a tuple of (upper bound, chance) tuples, "
+                f"got {pairs!r}"
+            )
+        bounds = [float(bound) for bound, _ in pairs]
+        finite = all(math.isfinite(bound) for bound in bounds)
+        if not bounds or not finite or bounds != sorted(set(bounds)) or bounds[0] <= 0:
             raise ValueError(
                 f"{_OWNER}.detection_chance must be (upper bound, chance) pairs with positive "
                 f"ascending bounds, got {self.detection_chance}"
@@ -353,8 +368,8 @@ class BallFilter:
         self._unseen_chance = 1.0
         if unkicked is not None and position_std(unkicked[1]) <= self.config.lost_std_m:
             self._state, self._cov = unkicked
-        else:
-            self._known = False
+        else:  # as before the first sighting
+            self._known, self._state, self._cov = False, np.zeros(4), np.eye(4)
 
     def _kicked_by_us(self, kick_velocity: FloatArray) -> tuple[FloatArray, FloatArray]:
         """The state and covariance of the last frame after our kick of ``kick_velocity`` (2,):

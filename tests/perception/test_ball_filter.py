@@ -449,7 +449,8 @@ def test_a_kick_seen_rolling_is_kept_and_the_ball_left_behind_forgotten() -> Non
     pose = [0.0, 0.0, 0.0]
     ball_filter, t = steady_filter(pose, [0.2, 0.0])
     ball_filter.update(t + DT, [], STILL, self_pose(pose), kick_velocity=[2.0, 0.0])
-    rolled_to = 0.2 + 2 * 0.71 * 2.0 * DT  # two frames at the kick's rolling speed
+    rolling = BallFilterConfig().own_kick_rolling_fraction * 2.0
+    rolled_to = 0.2 + 2 * rolling * DT  # two frames at the kick's rolling speed
     estimate = ball_filter.update(
         t + 2 * DT, [observe(pose, [rolled_to, 0.0])], STILL, self_pose(pose)
     )
@@ -491,6 +492,7 @@ def test_a_ball_unseen_is_lost_once_its_position_std_passes_lost_std_m(lost_std_
         assert estimate.known == (k < k_lost), k
         assert estimate.last_seen_s == t
     np.testing.assert_array_equal(estimate.state, np.zeros(4))
+    np.testing.assert_array_equal(estimate.relative, np.zeros(4))
     far = [0.5, -1.0]
     estimate = ball_filter.update(
         t + (k_lost + 1) * DT, [observe(pose, far)], STILL, self_pose(pose)
@@ -586,9 +588,10 @@ def test_a_kicked_belief_in_view_unseen_falls_back_to_the_ball_left_behind() -> 
     t = 4 * DT
     estimate = ball_filter.update(t + DT, [], STILL, self_pose(pose), [2.0, 0.0], in_view=ahead)
     k = 1
-    while estimate.relative[0] < 0.5:  # rolling into view: the first miss
+    while estimate.relative[0] < 0.5 and k < 20:  # rolling into view: the first miss
         k += 1
         estimate = ball_filter.update(t + k * DT, [], STILL, self_pose(pose), in_view=ahead)
+    assert estimate.relative[0] >= 0.5
     for miss in (2, 3):
         estimate = ball_filter.update(
             t + (k + miss - 1) * DT, [], STILL, self_pose(pose), in_view=ahead
@@ -888,6 +891,8 @@ def test_reset_forgets_the_ball_the_time_and_the_candidate() -> None:
         ("detection_chance", ((1.0, 0.5), (0.5, 0.5))),
         ("detection_chance", ((0.0, 0.5),)),
         ("detection_chance", ((1.0, 1.5),)),
+        ("detection_chance", ((math.nan, 0.5),)),
+        ("detection_chance", ((1.0, 0.5), (math.inf, 0.5))),
         ("view_margin", 0.5),
         ("gate_probability", 1.0),
         ("gate_probability", 0.0),
@@ -902,6 +907,12 @@ def test_reset_forgets_the_ball_the_time_and_the_candidate() -> None:
 def test_config_rejects_bad_values(field: str, value: float) -> None:
     with pytest.raises(ValueError, match=f"BallFilterConfig.{field}"):
         BallFilterConfig(**{field: value})
+
+
+def test_config_wants_detection_chance_as_a_tuple_of_pairs() -> None:
+    for bad in ([(1.0, 0.5)], ((1.0, 0.5, 0.1),), ([1.0, 0.5],)):
+        with pytest.raises(TypeError, match=r"BallFilterConfig\.detection_chance"):
+            BallFilterConfig(detection_chance=bad)  # type: ignore[arg-type]
 
 
 def test_config_gate_is_the_chi_square_quantile() -> None:

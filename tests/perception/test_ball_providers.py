@@ -180,6 +180,31 @@ def test_tracked_ball_refuses_a_self_pose_or_odometry_of_the_wrong_type() -> Non
         provider.update({**good, ODOMETRY: np.zeros(3)}, 0.1)
 
 
+def test_tracked_ball_loses_a_ball_its_camera_shows_but_does_not_see() -> None:
+    """A ball seen once 2 m along the head's direction (the camera's centre column), then never
+    again: lost on the third frame (the chance to see it there 0.8: 0.2³ < 0.01); the same
+    ball seen behind the robot, where the camera does not look, is still believed after ten
+    frames. The provider's in_view reads the frame's camera and its state."""
+    step = OdometryStep(delta=np.zeros(3), walk_delta=np.zeros(3))
+    for bearing, lost_at in ((STATE.head_yaw, 3), (math.pi, None)):
+        provider = TrackedBall(BallFilterConfig(), 0.05)
+        provider.reset(Prior(pose=POSE, rng=np.random.default_rng(0)))
+        inputs = {
+            BALL_SIGHTINGS: (
+                BallSighting(range_m=2.0, bearing_rad=bearing, cov=np.diag([1e-4, 1e-4])),
+            ),
+            ODOMETRY: step,
+            SELF_POSE: slam_estimate(),
+            "kick_velocity": NO_KICK,
+            "camera": CAMERA,
+            "camera_state": STATE,
+        }
+        assert provider.update(inputs, 0.0).known
+        for k in range(1, 11):
+            known = provider.update({**inputs, BALL_SIGHTINGS: ()}, 0.1 * k).known
+            assert known == (lost_at is None or k < lost_at), (bearing, k)
+
+
 def test_cnn_ball_sightings_provider_reads_the_frame_camera() -> None:
     provider = CnnBallSightings(CnnBallConfig(row_offset_px=1.0))
     inputs = {

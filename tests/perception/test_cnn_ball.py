@@ -311,7 +311,8 @@ def test_a_ball_is_in_view_within_the_field_of_view_less_the_margin(margin: floa
         for sign in (1.0, -1.0):
             point = 2.0 * np.array([1.0, sign * math.tan(angle)])
             assert ball_in_view(point, CAMERA, state, radius, margin) == inside, (angle, sign)
-    # a camera lower than the ball's centre by 2 tan(a): the ball sits at vertical angle a
+    # a camera lower (or higher) than the ball's centre by 2 tan(a): the ball sits at vertical
+    # angle a above (or below) the optical axis
     half_v = math.atan(math.tan(math.radians(CAMERA.vfov_deg) / 2) * (1 - 2 * margin))
     for angle, inside in ((half_v - 1e-3, True), (half_v + 1e-3, False)):
         for sign in (1.0, -1.0):
