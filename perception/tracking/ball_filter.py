@@ -53,12 +53,13 @@ either side) sets the ball's velocity to that kick's rolling
 velocity (``own_kick_rolling_fraction`` of it) with std ``own_kick_std_mps`` on each axis,
 forgetting the velocity's correlations. A kick may also leave the ball where it was (blocked by
 a robot behind it, or the ball not quite in the kick zone), so the belief without the kick is
-kept beside it, predicted alike, until a sighting is fused: a sighting is fused into whichever
-of the two gives it the higher likelihood, and when the kicked belief is lost the ball is
-believed where it was, if that belief's position std is still under ``lost_std_m`` (its own
-misses in view are not counted: it lies at our feet, where the top camera cannot see). A
-second kick before a sighting keeps only its own belief without the kick (the first kick's
-kicked belief).
+kept beside it, predicted alike, until a sighting is fused (into the kicked belief, as any
+sighting: a sighting near the feet after a kick is as often something else, such as the
+penalty mark the ball has left); when the kicked belief is lost unseen, the ball is believed
+where it was, if that belief's position std is still under ``lost_std_m`` (its own misses in
+view are not counted: it lies at our feet, where the top camera cannot see). A second kick
+before a sighting keeps only its own belief without the kick (the first kick's kicked
+belief).
 """
 
 from __future__ import annotations
@@ -421,10 +422,6 @@ class BallFilter:
             self._start(*measurements[0], time_s)
             return
         best = self._nearest(measurements)
-        if self._unkicked is not None:  # our kick may have left the ball be: the likelier
-            left = self._nearest(measurements, self._unkicked)
-            if left is not None and (best is None or left[1] < best[1]):
-                (self._state, self._cov), best = self._unkicked, left
         if best is None:  # perhaps kicked since the last frame: a velocity jump then
             kicked_cov = before[1].copy()
             kicked_cov[2:, 2:] += self.config.kick_velocity_std_mps**2 * np.eye(2)
@@ -434,10 +431,10 @@ class BallFilter:
             if best is None:
                 self._state, self._cov = held
             elif not confirmed:  # drifted unconfirmed: the sighting outweighs the belief
-                self._start(*best[0], time_s)
+                self._start(*best, time_s)
                 return
         if best is not None:
-            (z, R), _ = best
+            z, R = best
             self._state, self._cov = joseph_update(
                 self._state, self._cov, z - self._state[:2], _H, R
             )
@@ -451,21 +448,16 @@ class BallFilter:
             self._candidate = (z, R)
 
     def _nearest(
-        self,
-        measurements: list[tuple[FloatArray, FloatArray]],
-        belief: tuple[FloatArray, FloatArray] | None = None,
-    ) -> tuple[tuple[FloatArray, FloatArray], float] | None:
-        """The measurement with the least Mahalanobis distance to the prediction ``belief``
-        (state (4,), covariance (4, 4); the filter's own by default), if within the gate; with
-        its negative log-likelihood (up to a constant: ``(d² + log det S) / 2``)."""
-        state, cov = (self._state, self._cov) if belief is None else belief
-        scored = []
-        for z, R in measurements:
-            S = cov[:2, :2] + R
-            d2 = float(mahalanobis_squared(z - state[:2], S))
-            scored.append((d2, 0.5 * (d2 + math.log(np.linalg.det(S)))))
-        k = int(np.argmin([d2 for d2, _ in scored]))
-        return (measurements[k], scored[k][1]) if scored[k][0] <= self._gate else None
+        self, measurements: list[tuple[FloatArray, FloatArray]]
+    ) -> tuple[FloatArray, FloatArray] | None:
+        """The measurement with the least Mahalanobis distance to the prediction, if within the
+        gate."""
+        P = self._cov[:2, :2]
+        distances = [
+            float(mahalanobis_squared(z - self._state[:2], P + R)) for z, R in measurements
+        ]
+        k = int(np.argmin(distances))
+        return measurements[k] if distances[k] <= self._gate else None
 
     def _agrees(self, a: tuple[FloatArray, FloatArray], b: tuple[FloatArray, FloatArray]) -> bool:
         """Whether two robot-frame measurements ``(z, R)`` can show the same resting ball."""
