@@ -75,11 +75,7 @@ from perception.estimation.kalman import joseph_update
 from perception.geometry import FloatArray, rot_z
 from perception.tracking.robot_tracker import sighting_in_field
 from perception.types import BallEstimate, BallSighting, SlamEstimate
-from perception.validation import (
-    check_in_interval,
-    check_positive,
-    check_probability,
-)
+from perception.validation import check_in_interval, check_positive, check_probability
 
 _OWNER = "BallFilterConfig"
 _H = np.hstack([np.eye(2), np.zeros((2, 2))])  # the sightings measure the position

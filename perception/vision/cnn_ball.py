@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from perception.geometry import FloatArray, project_points
+from perception.geometry import FloatArray
 from perception.types import BallSighting, CameraModel, CameraState
 from perception.validation import (
     check_in_interval,
@@ -41,6 +41,7 @@ from perception.validation import (
     check_probability,
     finite_vector,
 )
+from perception.vision.field_pixels import GroundProjection
 from perception.vision.ground_point import height_point, range_bearing_cov
 
 if TYPE_CHECKING:
@@ -125,10 +126,8 @@ def ball_in_view(
     """Whether a ball lying at ``point`` (2,) (m, robot frame; its centre ``radius_m`` above
     the ground) shows in the image of ``camera`` taken from ``state``, at least ``margin`` (a
     share of the image's width and height) inside its edges."""
-    centre = np.array([point[0], point[1], radius_m]) - state.position
-    pixel, front = project_points(
-        state.rotation().T @ centre, camera.fx, camera.fy, camera.cx, camera.cy
-    )
+    centre = np.array([[point[0], point[1], radius_m]])
+    pixel, front = GroundProjection(camera, state).project(centre)
     if not front[0]:
         return False
     u, v = pixel[0]
