@@ -38,10 +38,10 @@ def compose(a: ArrayLike, b: ArrayLike) -> FloatArray:
 
     Both are (3,) arrays ``(x, y, theta)``; returns (3,).
     """
-    ax, ay, at = np.asarray(a, dtype=np.float64)
-    bx, by, bt = np.asarray(b, dtype=np.float64)
-    c, s = np.cos(at), np.sin(at)
-    return np.array([ax + c * bx - s * by, ay + s * bx + c * by, float(wrap_angle(at + bt))])
+    ax, ay, at = np.asarray(a, dtype=np.float64).tolist()
+    bx, by, bt = np.asarray(b, dtype=np.float64).tolist()
+    c, s = math.cos(at), math.sin(at)
+    return np.array([ax + c * bx - s * by, ay + s * bx + c * by, wrap_scalar(at + bt)])
 
 
 def invert(a: ArrayLike) -> FloatArray:
@@ -77,19 +77,19 @@ def range_bearing(pose: ArrayLike, points: ArrayLike) -> FloatArray:
 
 def rot_x(angle: float) -> FloatArray:
     """(3, 3) rotation about the x axis by ``angle`` (rad)."""
-    c, s = np.cos(angle), np.sin(angle)
+    c, s = math.cos(angle), math.sin(angle)
     return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
 
 
 def rot_y(angle: float) -> FloatArray:
     """(3, 3) rotation about the y axis; a positive angle tips the x axis downwards."""
-    c, s = np.cos(angle), np.sin(angle)
+    c, s = math.cos(angle), math.sin(angle)
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
 
 def rot_z(angle: float) -> FloatArray:
     """(3, 3) rotation about the z axis by ``angle`` (rad)."""
-    c, s = np.cos(angle), np.sin(angle)
+    c, s = math.cos(angle), math.sin(angle)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 

@@ -317,14 +317,23 @@ class NaoRobot:
         whether the body may move there (see :meth:`commit_motion`).
         """
         cfg = self.config
-        target = np.clip(command, -np.asarray(cfg.max_speed), np.asarray(cfg.max_speed))
-        max_change = np.asarray(cfg.max_accel) * dt_s
-        self.velocity = self.velocity + np.clip(target - self.velocity, -max_change, max_change)
-        speed = float(np.max(np.abs(self.velocity) / np.asarray(cfg.max_speed)))
+        velocity = []  # per component, in floats: a step costs no array operations
+        for now, wanted, top, accel in zip(
+            self.velocity.tolist(),
+            np.asarray(command).tolist(),
+            cfg.max_speed,
+            cfg.max_accel,
+            strict=True,
+        ):
+            target = min(max(wanted, -top), top)
+            change = accel * dt_s
+            velocity.append(now + min(max(target - now, -change), change))
+        self.velocity = np.array(velocity)
+        speed = self._speed_fraction()
         self.gait_phase = (
             self.gait_phase + 2 * math.pi * cfg.gait_frequency_hz * dt_s * (speed > 1e-3)
         ) % (2 * math.pi)
-        vx, vy, omega = self.velocity * dt_s
+        vx, vy, omega = (v * dt_s for v in velocity)
         if abs(omega) < 1e-9:
             return np.array([vx, vy, 0.0])
         # constant body-frame twist over the step: exact arc increment
@@ -393,12 +402,19 @@ class NaoRobot:
     def sway(self) -> tuple[float, float, float]:
         """Current torso roll, pitch (rad) and bob (m) from the gait phase and walking speed."""
         cfg = self.config
-        speed = float(np.max(np.abs(self.velocity) / np.asarray(cfg.max_speed)))
+        speed = self._speed_fraction()
         phase = self.gait_phase
         return (
             cfg.sway_roll_rad * speed * math.sin(phase),
             cfg.sway_pitch_rad * speed * math.sin(2 * phase),
             cfg.sway_bob_m * speed * (math.cos(2 * phase) - 1) / 2,
+        )
+
+    def _speed_fraction(self) -> float:
+        """The walk's speed as the largest fraction of a speed limit among vx, vy, omega."""
+        return max(
+            abs(v) / top
+            for v, top in zip(self.velocity.tolist(), self.config.max_speed, strict=True)
         )
 
     def sync(self) -> None:

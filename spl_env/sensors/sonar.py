@@ -99,6 +99,8 @@ class Sonar:
         out = np.full((N_SONAR_SECTORS, m.max_echoes), np.nan)
         for sector in range(N_SONAR_SECTORS):
             rows = slice(sector * n, (sector + 1) * n)
+            if np.all(bodies[rows] < 0):  # silence: no echo, and no noise to draw
+                continue
             true_echoes = merge_echoes(
                 surface_echoes(distances[rows], bodies[rows]), m.echo_merge_m
             )

@@ -15,7 +15,7 @@ from typing import Protocol
 
 import numpy as np
 
-from perception.geometry import FloatArray, transform_points
+from perception.geometry import FloatArray
 
 
 class Area(Protocol):
@@ -70,26 +70,29 @@ class Placement:
         self.obstacles = np.asarray(obstacles, dtype=np.float64).reshape(-1, 3)
         self.robot_radius_m = robot_radius_m
 
-    def collides(self, xy: FloatArray, robots: Sequence[Mobile], clearance: float) -> bool:
+    def collides(
+        self, xy: Sequence[float] | FloatArray, robots: Sequence[Mobile], clearance: float
+    ) -> bool:
         """Whether a robot at ``xy`` (2,) overlaps one of ``robots``, a post or a pole, or leaves
         the carpet, with ``clearance`` (m) to spare."""
         return self.obstruction(xy, robots, clearance) is not None
 
     def obstruction(
-        self, xy: FloatArray, robots: Sequence[Mobile], clearance: float
+        self, xy: Sequence[float] | FloatArray, robots: Sequence[Mobile], clearance: float
     ) -> FloatArray | None:
         """Where a robot at ``xy`` (2,) would touch what it overlaps (with ``clearance`` m to
         spare): the point (2,) (m) of the carpet's edge it crosses, or the centre of the first
         robot, post or pole it overlaps; None when it is clear."""
         r = self.robot_radius_m
+        x, y = float(xy[0]), float(xy[1])
         half_l, half_w = (size / 2 - r for size in self.dimensions.carpet_size_m)
-        if abs(xy[0]) > half_l or abs(xy[1]) > half_w:
-            edge = np.array([np.clip(xy[0], -half_l, half_l), np.clip(xy[1], -half_w, half_w)])
-            return edge + np.array([r * np.sign(xy[0] - edge[0]), r * np.sign(xy[1] - edge[1])])
+        if abs(x) > half_l or abs(y) > half_w:
+            edge = np.array([np.clip(x, -half_l, half_l), np.clip(y, -half_w, half_w)])
+            return edge + np.array([r * np.sign(x - edge[0]), r * np.sign(y - edge[1])])
         for robot in robots:
-            if math.hypot(*(robot.pose[:2] - xy)) < 2 * r + clearance:
+            if math.hypot(robot.pose[0] - x, robot.pose[1] - y) < 2 * r + clearance:
                 return np.asarray(robot.pose[:2], dtype=np.float64).copy()
-        d = np.hypot(self.obstacles[:, 0] - xy[0], self.obstacles[:, 1] - xy[1])
+        d = np.hypot(self.obstacles[:, 0] - x, self.obstacles[:, 1] - y)
         hit = np.flatnonzero(d < r + self.obstacles[:, 2] + clearance)
         return self.obstacles[hit[0], :2].copy() if hit.size else None
 
@@ -126,7 +129,10 @@ class Placement:
         ran into (:meth:`obstruction`), so that a Nao may pivot away from it.
         """
         increment = robot.walk_step(command, dt_s)
-        new_xy = transform_points(robot.pose, increment[None, :2])[0]
+        x, y, heading = robot.pose.tolist()
+        c, s = math.cos(heading), math.sin(heading)
+        ahead, left = increment[0], increment[1]
+        new_xy = (x + c * ahead - s * left, y + s * ahead + c * left)
         contact = self.obstruction(new_xy, others, clearance=0.0)
         if contact is None:
             robot.commit_motion(increment)

@@ -2,6 +2,11 @@
 
 Each world owns its own ``p.DIRECT`` physics client and passes ``physicsClientId`` on every call,
 so several worlds live side by side in one process. Bodies are addressed by name.
+
+Stepping skips the physics while it has nothing to do: when every dynamic body (the ball) lies
+at rest in contact and no body moved by hand (a robot, a spectator) comes near it, a PyBullet
+step leaves the world as it was, and the 10 steps of a control step would cost more than all
+the rest of a geometric-mode env step.
 """
 
 from __future__ import annotations
@@ -18,6 +23,8 @@ from perception.geometry import FloatArray
 from perception.validation import check_finite, check_positive, finite_points, finite_vector
 
 MAX_PARTS_PER_BODY = 16  # PyBullet's shape arrays crash beyond 16 shapes
+REST_SPEED = 1e-6  # m/s and rad/s: a dynamic body this slow in contact lies at rest
+REST_CLEARANCE_M = 0.05  # a moved body this near a resting one could touch it in a step
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -125,6 +132,9 @@ class BulletWorld:
         # the lighting the floor was last shaded under, and its RGB (3,) then
         self._floor_colour_for: tuple[Lighting, NDArray[np.uint8]] | None = None
         self._probe: int | None = None  # a client holding the floor alone, to shade it
+        self._dynamic: list[int] = []  # bodies with mass, which the physics moves
+        self._moved: set[int] = set()  # bodies moved by hand (set_pose, set_joint) ever
+        self._disturbed = False  # a dynamic body was set by hand since the last physics step
         self.time_step_s = time_step_s
         p.setGravity(0.0, 0.0, -gravity_mps2, physicsClientId=self.client)
         p.setTimeStep(time_step_s, physicsClientId=self.client)
@@ -265,6 +275,8 @@ class BulletWorld:
             angularDamping=0.0,
             physicsClientId=self.client,
         )
+        self._dynamic.append(body_id)
+        self._disturbed = True
         return self._register(name, body_id)
 
     def add_articulated(
@@ -432,9 +444,11 @@ class BulletWorld:
     ) -> None:
         """Teleport body ``name`` to ``position`` (3,) with the given Euler angles (rad)."""
         quat = p.getQuaternionFromEuler([roll, pitch, yaw])
+        body_id = self.body(name)
         p.resetBasePositionAndOrientation(
-            self.body(name), list(position), quat, physicsClientId=self.client
+            body_id, list(position), quat, physicsClientId=self.client
         )
+        self._touched(body_id)
 
     def position(self, name: str) -> FloatArray:
         """World position (3,) of body ``name``'s base."""
@@ -450,18 +464,56 @@ class BulletWorld:
         self, name: str, linear: Sequence[float], angular: Sequence[float] = (0.0, 0.0, 0.0)
     ) -> None:
         """Set body ``name``'s linear (m/s) and angular (rad/s) velocity."""
-        p.resetBaseVelocity(
-            self.body(name), list(linear), list(angular), physicsClientId=self.client
-        )
+        body_id = self.body(name)
+        p.resetBaseVelocity(body_id, list(linear), list(angular), physicsClientId=self.client)
+        self._touched(body_id)
 
     def set_joint(self, name: str, joint_index: int, angle: float) -> None:
         """Set a revolute joint of body ``name`` to ``angle`` (rad)."""
-        p.resetJointState(self.body(name), joint_index, angle, physicsClientId=self.client)
+        body_id = self.body(name)
+        p.resetJointState(body_id, joint_index, angle, physicsClientId=self.client)
+        self._touched(body_id)
+
+    def _touched(self, body_id: int) -> None:
+        """Note that ``body_id`` was set by hand: a mover, or a dynamic body to simulate."""
+        if body_id in self._dynamic:
+            self._disturbed = True
+        else:
+            self._moved.add(body_id)
 
     def step(self, n_substeps: int) -> None:
-        """Advance the physics by ``n_substeps`` time steps."""
+        """Advance the physics by ``n_substeps`` time steps, or by none while :meth:`at_rest`
+        (the steps would change nothing)."""
+        if self.at_rest():
+            return
         for _ in range(n_substeps):
             p.stepSimulation(physicsClientId=self.client)
+        self._disturbed = False
+
+    def at_rest(self) -> bool:
+        """True when a physics step would leave the world as it is: no dynamic body was set by
+        hand since the last step, each lies in contact moving slower than ``REST_SPEED``, no
+        body moved by hand is within ``REST_CLEARANCE_M`` of one (by PyBullet's bounding boxes),
+        and no body was created behind the world's back (through :attr:`client`)."""
+        client = self.client
+        if self._disturbed or p.getNumBodies(physicsClientId=client) != len(self._bodies):
+            return False
+        for body_id in self._dynamic:
+            linear, angular = p.getBaseVelocity(body_id, physicsClientId=client)
+            if max(map(abs, (*linear, *angular))) > REST_SPEED:
+                return False
+            if not p.getContactPoints(bodyA=body_id, physicsClientId=client):
+                return False
+            low, high = p.getAABB(body_id, physicsClientId=client)
+            near = p.getOverlappingObjects(
+                [v - REST_CLEARANCE_M for v in low],
+                [v + REST_CLEARANCE_M for v in high],
+                physicsClientId=client,
+            )
+            movers = self._moved.union(self._dynamic).difference((body_id,))
+            if any(other in movers for other, _ in near or ()):
+                return False
+        return True
 
     def save_state(self) -> int:
         """Snapshot of the whole physics state, for exact resets."""
@@ -470,6 +522,7 @@ class BulletWorld:
     def restore_state(self, state_id: int) -> None:
         """Return to a snapshot from :meth:`save_state`."""
         p.restoreState(stateId=state_id, physicsClientId=self.client)
+        self._disturbed = True
 
     # ----- sensing ------------------------------------------------------------------------
     def ray_test(
@@ -489,9 +542,9 @@ class BulletWorld:
                 ends[lo : lo + batch].tolist(),
                 physicsClientId=self.client,
             )
-            for i, hit in enumerate(hits):
-                ids[lo + i] = hit[0]
-                fractions[lo + i] = hit[2] if hit[0] >= 0 else 1.0
+            body = np.array([hit[0] for hit in hits], dtype=np.int64)
+            ids[lo : lo + batch] = body
+            fractions[lo : lo + batch] = np.where(body >= 0, [hit[2] for hit in hits], 1.0)
         return fractions, ids
 
     def render(

@@ -156,43 +156,53 @@ class GeometricPoleCamera:
         m, pole = self.model, self.pole
         offset = self.positions - position[:2]
         distance = np.hypot(offset[:, 0], offset[:, 1])
-        towards = offset / np.maximum(distance, 1e-9)[:, None]
+        near = np.flatnonzero((distance > pole.radius_m) & (distance <= self.config.max_range_m))
+        if not near.size:
+            return []
         heights = (
             pole.upper_centre_m,
             pole.lower_centre_m,
             pole.top_m,
             pole.base_top_m - WHITE_BASE_SEEN_M,
         )
-        seen: list[BandCentres] = []
-        centres_3d: list[FloatArray] = []  # (2, 3) band-centre points of each seen pole
-        for k in np.flatnonzero((distance > pole.radius_m) & (distance <= self.config.max_range_m)):
-            surface = self.positions[k] - CENTROID_DEPTH_FACTOR * pole.radius_m * towards[k]
-            points = np.array([[*surface, z] for z in heights])
-            cam = (points - position) @ rotation
-            uv, front = project_points(cam, m.fx, m.fy, m.cx, m.cy)
-            if not front.all():
-                continue
-            half_width = m.fx * pole.radius_m / cam[:, 0].min()
-            box = np.array(
-                [uv[:, 0].min() - half_width, uv[2, 1], uv[:, 0].max() + half_width, uv[3, 1]]
-            )
-            margin = self.config.border_margin_px
-            if (
-                box[0] < margin
-                or box[1] < margin
-                or box[2] > m.width - margin
-                or box[3] > m.height - margin
-            ):
-                continue
-            seen.append(BandCentres(landmark_id=self.ids[k], upper=uv[0], lower=uv[1], box=box))
-            centres_3d.append(points[:2])
+        towards = offset[near] / distance[near, None]
+        surface = self.positions[near] - CENTROID_DEPTH_FACTOR * pole.radius_m * towards
+        # (K, 4, 3): each near pole's band centres, top and white base on its lit surface
+        points = np.empty((len(near), len(heights), 3))
+        points[:, :, :2] = surface[:, None, :]
+        points[:, :, 2] = heights
+        cam = (points - position) @ rotation
+        uv, front = project_points(cam.reshape(-1, 3), m.fx, m.fy, m.cx, m.cy)
+        uv = uv.reshape(len(near), len(heights), 2)
+        in_front = front.reshape(len(near), len(heights)).all(axis=1)
+        half_width = m.fx * pole.radius_m / cam[:, :, 0].min(axis=1)
+        boxes = np.column_stack(
+            [
+                uv[:, :, 0].min(axis=1) - half_width,
+                uv[:, 2, 1],
+                uv[:, :, 0].max(axis=1) + half_width,
+                uv[:, 3, 1],
+            ]
+        )
+        margin = self.config.border_margin_px
+        inside = (
+            (boxes[:, 0] >= margin)
+            & (boxes[:, 1] >= margin)
+            & (boxes[:, 2] <= m.width - margin)
+            & (boxes[:, 3] <= m.height - margin)
+        )
+        kept = np.flatnonzero(in_front & inside)
+        seen = [
+            BandCentres(landmark_id=self.ids[near[k]], upper=uv[k, 0], lower=uv[k, 1], box=boxes[k])
+            for k in kept
+        ]
         if not seen:
             return []
         # line of sight to both band centres: the first body each ray meets must be the pole
-        targets = np.vstack(centres_3d)
+        targets = points[kept, :2].reshape(-1, 3)
         starts = np.repeat(position[None, :], len(targets), axis=0)
         _, hit = world.ray_test(starts, starts + (targets - starts) * 1.001)
-        bodies = self.body_ids[[self.ids.index(b.landmark_id) for b in seen]]
+        bodies = self.body_ids[near[kept]]
         unblocked = np.all(hit.reshape(-1, 2) == bodies[:, None], axis=1)
         return [b for b, ok in zip(seen, unblocked, strict=True) if ok]
 
