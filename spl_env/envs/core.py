@@ -17,6 +17,7 @@ step loop of its own.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from abc import abstractmethod
 from collections.abc import Mapping
@@ -49,6 +50,7 @@ from spl_env.observations.base import (
     ObservationEncoder,
     compose_space,
     encode_all,
+    frame_reads,
 )
 from spl_env.observations.circles import CircleMapEncoder
 from spl_env.observations.field_features import FieldFeatureEncoder
@@ -411,8 +413,12 @@ class SplEnv(RobotEnv[WorldState]):
         self._render_image = rendered and "image" in self.pipeline.frame_inputs
         # the bottom camera is rendered only for a provider that reads it
         self._render_bottom = rendered and "bottom_image" in self.pipeline.frame_inputs
+        # the rig measures no sonar that neither perception nor an encoder reads (the
+        # geometric mode emulates the robot sightings' sonar check from the sonar's model)
+        read = self.pipeline.frame_inputs | frame_reads(self.encoders)
+        sensors = cfg.sensors if "sonar" in read else dataclasses.replace(cfg.sensors, sonar=None)
         self.rig = NaoRig(
-            cfg.sensors,
+            sensors,
             self.robots[AGENT],
             {name: emulators[name] for name in self.pipeline.emulated},
         )

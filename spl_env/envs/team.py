@@ -66,6 +66,7 @@ from spl_env.observations.base import (
     ObservationEncoder,
     compose_space,
     encode_all,
+    frame_reads,
 )
 from spl_env.observations.body import EpisodeClockEncoder, HeadEncoder
 from spl_env.observations.field_features import FieldFeatureEncoder
@@ -307,12 +308,11 @@ class TeamEnv(ParallelEnv[str, dict[str, np.ndarray], np.ndarray]):
             pipeline = PerceptionPipeline(
                 cfg.perception, context, sorted(outputs), emulated=tuple(emulators)
             )
-            # a rig measures no sonar that its pipeline does not read (the geometric mode
-            # emulates the robot sightings' sonar check from the sonar's model alone)
+            # a rig measures no sonar that neither perception nor an encoder reads (the
+            # geometric mode emulates the robot sightings' sonar check from the sonar's model)
+            read = pipeline.frame_inputs | frame_reads(encoders[robot.team])
             sensors = (
-                cfg.sensors
-                if "sonar" in pipeline.frame_inputs
-                else dataclasses.replace(cfg.sensors, sonar=None)
+                cfg.sensors if "sonar" in read else dataclasses.replace(cfg.sensors, sonar=None)
             )
             rig = NaoRig(sensors, robot, {r: emulators[r] for r in pipeline.emulated})
             self.players.append(Player(name, robot, rig, pipeline, encoders[robot.team]))

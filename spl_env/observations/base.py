@@ -56,6 +56,12 @@ class ObservationEncoder(Protocol):
         ...
 
 
+def frame_reads(encoders: Sequence[ObservationEncoder]) -> frozenset[str]:
+    """The :class:`SensorFrame` fields the ``encoders`` read themselves (an encoder declares
+    them in an optional ``frame_reads`` tuple), beside those perception reads."""
+    return frozenset(name for e in encoders for name in getattr(e, "frame_reads", ()))
+
+
 def compose_space(encoders: Sequence[ObservationEncoder]) -> spaces.Dict:
     """The ``Dict`` of every encoder's boxes; ValueError if two encoders share a key."""
     merged: dict[str, spaces.Space[Any]] = {}

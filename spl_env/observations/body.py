@@ -38,6 +38,7 @@ class SonarEncoder:
     1 when no echo (or no sonar)."""
 
     requires: tuple[str, ...] = ()
+    frame_reads: tuple[str, ...] = ("sonar",)
 
     def spaces(self) -> dict[str, spaces.Box]:
         return {"sonar": box(0.0, 1.0, 3)}

@@ -65,6 +65,22 @@ def test_rendered_penalty_sees_the_ball_with_both_cameras() -> None:
     env.close()
 
 
+def test_the_sonar_is_measured_only_where_something_reads_it() -> None:
+    """The geometric striker neither perceives nor observes the sonar, so its rig casts none;
+    the rendered one's robot sightings check the sonar; a head-control env observes it."""
+    striker = core_of(gym.make("SPL/Striker-v0", **FAST))
+    striker.reset(seed=0)
+    assert striker.rig.sonar is None and striker.sensor_frame.sonar is None
+    rendered = core_of(gym.make("SPL/Striker-v0", episode_s=3.0))
+    assert "sonar" in rendered.pipeline.frame_inputs and rendered.rig.sonar is not None
+    head = core_of(gym.make("SPL/ActiveVision-v1", camera_mode="geometric", frontend="colour"))
+    assert "sonar" not in head.pipeline.frame_inputs and "sonar" in head.observation_space.spaces
+    head.reset(seed=0)
+    assert head.sensor_frame.sonar is not None
+    for env in (striker, rendered, head):
+        env.close()
+
+
 def test_goal_and_out_geometry() -> None:
     """A goal needs the whole ball over the goal line between the posts (x > 4.5 + 0.025 +
     0.05); out is the whole ball beyond any outer line."""
