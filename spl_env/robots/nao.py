@@ -296,6 +296,10 @@ class NaoRobot:
                 ),
             ],
         )
+        # the last camera poses computed, by camera, with the robot state they were computed at
+        self._camera_pose_memo: dict[str, tuple[tuple[float, ...], tuple[FloatArray, FloatArray]]]
+        self._camera_pose_memo = {}
+        self._camera_state_memo: tuple[tuple[float, ...], CameraState] | None = None
         self.pose = np.zeros(3)
         self.velocity = np.zeros(3)
         self.head = np.zeros(2)
@@ -428,13 +432,32 @@ class NaoRobot:
 
     def camera_state(self) -> CameraState:
         """The camera pose the robot's joint sensors report (no sway): robot frame."""
-        return camera_state_for(self.config, self.head)
+        head = tuple(self.head.tolist())
+        if self._camera_state_memo is None or self._camera_state_memo[0] != head:
+            self._camera_state_memo = (head, camera_state_for(self.config, self.head))
+        return self._camera_state_memo[1]
 
     def camera_pose_world(
         self, camera: Literal["top", "bottom"] = "top"
     ) -> tuple[FloatArray, FloatArray]:
         """True position (3,) and rotation (3, 3) of the top or bottom camera in the field
-        frame, sway included."""
+        frame, sway included (computed once per state of the robot: the sensors of a step ask
+        several times)."""
+        state = (
+            *self.pose.tolist(),
+            *self.head.tolist(),
+            *self.velocity.tolist(),
+            float(self.gait_phase),
+        )
+        memo = self._camera_pose_memo.get(camera)
+        if memo is None or memo[0] != state:
+            memo = (state, self._camera_pose_now(camera))
+            self._camera_pose_memo[camera] = memo
+        position, rotation = memo[1]
+        return position.copy(), rotation.copy()
+
+    def _camera_pose_now(self, camera: Literal["top", "bottom"]) -> tuple[FloatArray, FloatArray]:
+        """:meth:`camera_pose_world`, computed."""
         roll, pitch, bob = self.sway()
         body = rot_z(self.pose[2]) @ rot_y(pitch) @ rot_x(roll)
         state = camera_state_for(self.config, self.head, camera)
