@@ -73,7 +73,7 @@ import numpy as np
 from perception.estimation.gating import chi2_threshold, mahalanobis_squared
 from perception.estimation.kalman import joseph_update
 from perception.geometry import FloatArray, rot_z
-from perception.tracking.robot_tracker import sighting_in_field
+from perception.tracking.robot_tracker import constant_velocity_model, sighting_in_field
 from perception.types import BallEstimate, BallSighting, SlamEstimate
 from perception.validation import check_in_interval, check_positive, check_probability
 
@@ -214,10 +214,7 @@ def rolling_model(
             factor * state[3],
         ]
     )
-    eye, zero = np.eye(2), np.zeros((2, 2))
-    F = np.block([[eye, dt * eye], [zero, eye]])  # the covariance's: constant velocity
-    q = config.acceleration_psd
-    Q = q * np.block([[dt**3 / 3 * eye, dt**2 / 2 * eye], [dt**2 / 2 * eye, dt * eye]])
+    F, Q = constant_velocity_model(dt, config.acceleration_psd)  # the covariance's
     return predicted, F, Q
 
 

@@ -110,10 +110,13 @@ def constant_velocity_model(dt: float, acceleration_psd: float) -> tuple[FloatAr
     """
     check_positive("", "dt", dt, allow_zero=True)
     check_positive("", "acceleration_psd", acceleration_psd, allow_zero=True)
-    eye = np.eye(2)
-    F = np.block([[eye, dt * eye], [np.zeros((2, 2)), eye]])
+    F = np.eye(4)
+    F[0, 2] = F[1, 3] = dt
     q = acceleration_psd
-    Q = q * np.block([[dt**3 / 3.0 * eye, dt**2 / 2.0 * eye], [dt**2 / 2.0 * eye, dt * eye]])
+    Q = np.zeros((4, 4))
+    Q[0, 0] = Q[1, 1] = q * (dt**3 / 3.0)
+    Q[0, 2] = Q[1, 3] = Q[2, 0] = Q[3, 1] = q * (dt**2 / 2.0)
+    Q[2, 2] = Q[3, 3] = q * dt
     return F, Q
 
 
