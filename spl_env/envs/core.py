@@ -59,7 +59,7 @@ from spl_env.rendering import TopDownView, draw_detections, side_by_side
 from spl_env.robots.nao import NaoCommand, NaoRobot, kick_intent
 from spl_env.scenes.spl_field import SplFieldScene
 from spl_env.sensors.emulation.registry import emulators_for
-from spl_env.sensors.rig import NaoRig
+from spl_env.sensors.rig import SONAR_FIELDS, NaoRig
 from spl_env.sim.placement import Placement
 from spl_env.sim.world import BulletWorld
 from spl_env.tasks.base import Task, TaskContext
@@ -416,7 +416,9 @@ class SplEnv(RobotEnv[WorldState]):
         # the rig measures no sonar that neither perception nor an encoder reads (the
         # geometric mode emulates the robot sightings' sonar check from the sonar's model)
         read = self.pipeline.frame_inputs | frame_reads(self.encoders)
-        sensors = cfg.sensors if "sonar" in read else dataclasses.replace(cfg.sensors, sonar=None)
+        sensors = (
+            cfg.sensors if read & SONAR_FIELDS else dataclasses.replace(cfg.sensors, sonar=None)
+        )
         self.rig = NaoRig(
             sensors,
             self.robots[AGENT],

@@ -77,7 +77,7 @@ from spl_env.rendering import SLAM_BGR, TEAM_BGR, TopDownView, draw_ellipse, dra
 from spl_env.robots.nao import NaoCommand, NaoRobot, kick_intent
 from spl_env.scenes.spl_field import SplFieldScene
 from spl_env.sensors.emulation.registry import emulators_for
-from spl_env.sensors.rig import NaoRig
+from spl_env.sensors.rig import SONAR_FIELDS, NaoRig
 from spl_env.sim.placement import Placement
 from spl_env.sim.world import BulletWorld
 from spl_env.tasks.soccer import (
@@ -312,7 +312,7 @@ class TeamEnv(ParallelEnv[str, dict[str, np.ndarray], np.ndarray]):
             # geometric mode emulates the robot sightings' sonar check from the sonar's model)
             read = pipeline.frame_inputs | frame_reads(encoders[robot.team])
             sensors = (
-                cfg.sensors if "sonar" in read else dataclasses.replace(cfg.sensors, sonar=None)
+                cfg.sensors if read & SONAR_FIELDS else dataclasses.replace(cfg.sensors, sonar=None)
             )
             rig = NaoRig(sensors, robot, {r: emulators[r] for r in pipeline.emulated})
             self.players.append(Player(name, robot, rig, pipeline, encoders[robot.team]))

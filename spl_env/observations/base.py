@@ -57,8 +57,9 @@ class ObservationEncoder(Protocol):
 
 
 def frame_reads(encoders: Sequence[ObservationEncoder]) -> frozenset[str]:
-    """The :class:`SensorFrame` fields the ``encoders`` read themselves (an encoder declares
-    them in an optional ``frame_reads`` tuple), beside those perception reads."""
+    """The optional :class:`SensorFrame` fields the ``encoders`` read themselves, beside those
+    perception reads: an encoder reading a field that a rig measures only when something reads
+    it (the sonar) names it in a ``frame_reads`` class attribute (a tuple of field names)."""
     return frozenset(name for e in encoders for name in getattr(e, "frame_reads", ()))
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 from gymnasium import spaces
@@ -38,7 +39,7 @@ class SonarEncoder:
     1 when no echo (or no sonar)."""
 
     requires: tuple[str, ...] = ()
-    frame_reads: tuple[str, ...] = ("sonar",)
+    frame_reads: ClassVar[tuple[str, ...]] = ("sonar",)
 
     def spaces(self) -> dict[str, spaces.Box]:
         return {"sonar": box(0.0, 1.0, 3)}

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -297,9 +297,10 @@ class NaoRobot:
             ],
         )
         # the last camera poses computed, by camera, with the robot state they were computed at
-        self._camera_pose_memo: dict[str, tuple[tuple[float, ...], tuple[FloatArray, FloatArray]]]
+        # (the config is part of the state: it holds the camera offsets)
+        self._camera_pose_memo: dict[str, tuple[tuple[Any, ...], tuple[FloatArray, FloatArray]]]
         self._camera_pose_memo = {}
-        self._camera_state_memo: tuple[tuple[float, ...], CameraState] | None = None
+        self._camera_state_memo: tuple[tuple[Any, ...], CameraState] | None = None
         self.pose = np.zeros(3)
         self.velocity = np.zeros(3)
         self.head = np.zeros(2)
@@ -431,10 +432,13 @@ class NaoRobot:
         self.world.set_joint(self.name, 1, float(self.head[1]))
 
     def camera_state(self) -> CameraState:
-        """The camera pose the robot's joint sensors report (no sway): robot frame."""
-        head = tuple(self.head.tolist())
-        if self._camera_state_memo is None or self._camera_state_memo[0] != head:
-            self._camera_state_memo = (head, camera_state_for(self.config, self.head))
+        """The camera pose the robot's joint sensors report (no sway): robot frame (computed
+        once per head position; its ``position`` is read-only, as the frames share it)."""
+        key = (self.config, *self.head.tolist())
+        if self._camera_state_memo is None or self._camera_state_memo[0] != key:
+            state = camera_state_for(self.config, self.head)
+            state.position.setflags(write=False)
+            self._camera_state_memo = (key, state)
         return self._camera_state_memo[1]
 
     def camera_pose_world(
@@ -444,6 +448,7 @@ class NaoRobot:
         frame, sway included (computed once per state of the robot: the sensors of a step ask
         several times)."""
         state = (
+            self.config,
             *self.pose.tolist(),
             *self.head.tolist(),
             *self.velocity.tolist(),

@@ -60,6 +60,9 @@ class RigConfig:
             )
 
 
+SONAR_FIELDS = frozenset({"sonar", "sonar_model"})  # the SensorFrame fields the sonar fills
+
+
 class Emulator(Protocol):
     """Produces one representation from the true camera pose, without rendering."""
 

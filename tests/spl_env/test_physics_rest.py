@@ -112,3 +112,36 @@ def test_a_restored_state_is_simulated(world: BulletWorld) -> None:
     assert world.at_rest()
     world.restore_state(snapshot)
     assert not world.at_rest()
+
+
+def test_penalty_episodes_match_those_stepped_throughout(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A geometric penalty (the scripted striker walks up, kicks, the ball rolls and stops):
+    the same observations and ball with the resting skip as with every physics step taken,
+    and the skip did skip steps."""
+    import gymnasium as gym
+
+    import spl_env  # noqa: F401
+    from agents.soccer_baselines import CentreKickStriker
+
+    def episode() -> tuple[np.ndarray, int]:
+        env = gym.make("SPL/PenaltyShootout-v0", camera_mode="geometric", frontend="colour")
+        player = CentreKickStriker.from_config(env.unwrapped.config)
+        obs, _ = env.reset(seed=4)
+        rows, skipped = [], 0
+        for _ in range(60):
+            skipped += env.unwrapped.world.at_rest()
+            obs, _, terminated, truncated, info = env.step(player.act(obs))
+            rows.append(
+                np.concatenate([*(obs[k] for k in sorted(obs)), info["ground_truth"]["ball"]])
+            )
+            if terminated or truncated:
+                break
+        env.close()
+        return np.array(rows), skipped
+
+    skipping, skipped = episode()
+    monkeypatch.setattr(BulletWorld, "at_rest", lambda self: False)
+    stepped, _ = episode()
+    assert skipped > 5
+    assert skipping.shape == stepped.shape
+    np.testing.assert_allclose(skipping, stepped, atol=1e-6)

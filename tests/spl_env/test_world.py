@@ -240,3 +240,41 @@ def test_the_scene_names_each_panels_poster_from_the_set_asked_for() -> None:
         world.close()
     with pytest.raises(ValueError, match="poster_set"):
         SceneConfig(poster_set="plain")
+
+
+def test_camera_pose_follows_every_part_of_the_robot_state(scene) -> None:
+    """The memoised camera poses change with the pose, head, walk velocity, gait phase and
+    config, even without a sync: each equals a fresh robot's in the same state."""
+    world, _, robot = scene
+    probe = NaoRobot(world, "probe", team=1, config=RobotConfig())
+
+    def same_as_fresh() -> None:
+        probe.config, probe.pose, probe.head = robot.config, robot.pose, robot.head
+        probe.velocity, probe.gait_phase = robot.velocity, robot.gait_phase
+        probe._camera_pose_memo.clear()
+        probe._camera_state_memo = None
+        for camera in ("top", "bottom"):
+            for got, want in zip(
+                robot.camera_pose_world(camera), probe.camera_pose_world(camera), strict=True
+            ):
+                np.testing.assert_array_equal(got, want)
+        np.testing.assert_array_equal(robot.camera_state().position, probe.camera_state().position)
+
+    robot.place(np.array([0.5, -0.3, 0.2]), head=np.array([0.1, 0.2]))
+    same_as_fresh()
+    first = robot.camera_pose_world()[0]
+    robot.pose = np.array([1.0, -0.3, 0.2])
+    same_as_fresh()
+    assert not np.allclose(robot.camera_pose_world()[0], first)
+    robot.head = np.array([-0.4, 0.1])
+    same_as_fresh()
+    robot.velocity, robot.gait_phase = np.array([0.2, 0.0, 0.0]), 1.0
+    same_as_fresh()
+    before = robot.camera_pose_world()[0]
+    robot.config = RobotConfig(camera_offset_m=(0.2, 0.0, 0.1))
+    same_as_fresh()
+    assert not np.allclose(robot.camera_pose_world()[0], before)
+    with pytest.raises(ValueError):  # the shared camera state is read-only
+        robot.camera_state().position[0] = 0.0
+    robot.config = RobotConfig()
+    robot.place(np.zeros(3))

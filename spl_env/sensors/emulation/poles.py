@@ -175,7 +175,8 @@ class GeometricPoleCamera:
         uv, front = project_points(cam.reshape(-1, 3), m.fx, m.fy, m.cx, m.cy)
         uv = uv.reshape(len(near), len(heights), 2)
         in_front = front.reshape(len(near), len(heights)).all(axis=1)
-        half_width = m.fx * pole.radius_m / cam[:, :, 0].min(axis=1)
+        nearest = cam[:, :, 0].min(axis=1)  # depth of each pole's nearest point (m)
+        half_width = m.fx * pole.radius_m / np.where(in_front, nearest, 1.0)
         boxes = np.column_stack(
             [
                 uv[:, :, 0].min(axis=1) - half_width,
