@@ -141,8 +141,14 @@ class CameraState:
     tilt: float = 0.0
 
     def rotation(self) -> FloatArray:
-        """(3, 3) camera-to-robot rotation."""
-        return camera_rotation(self.head_yaw, self.head_pitch + self.tilt)
+        """(3, 3) camera-to-robot rotation: computed once per state (a frame's detectors ask
+        for it many times), read-only."""
+        cached: FloatArray | None = self.__dict__.get("_rotation")
+        if cached is None:
+            cached = camera_rotation(self.head_yaw, self.head_pitch + self.tilt)
+            cached.setflags(write=False)
+            object.__setattr__(self, "_rotation", cached)  # not a field: eq and repr ignore it
+        return cached
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -359,8 +359,6 @@ class RobotDetector:
             np.array([h_lo, 0, v_lo], np.uint8),
             np.array([h_hi, s_hi, v_hi], np.uint8),
         )
-        self._rotation_of: CameraState | None = None  # a one-frame cache of the rotation
-        self._rotation_value = np.eye(3)
         self._pole = [tuple(np.array(b, dtype=np.uint8) for b in r) for r in config.pole_hsv]
         self._teams = [
             [tuple(np.array(b, dtype=np.uint8) for b in r) for r in ranges]
@@ -467,7 +465,7 @@ class RobotDetector:
         cfg, cam = self.config, self.camera
         edges = np.arange(2 * cam.height + 1, dtype=np.float64) / 2 - 0.5  # row edges, centres
         pixels = np.column_stack([np.full(len(edges), cam.cx), edges])
-        rays = pixel_rays(pixels, cam.fx, cam.fy, cam.cx, cam.cy) @ self._rotation(state).T
+        rays = pixel_rays(pixels, cam.fx, cam.fy, cam.cx, cam.cy) @ state.rotation().T
         xy, hits = ray_ground_intersection(state.position, rays)
         distance = np.full(len(edges), np.inf)
         distance[hits] = np.hypot(*(xy[hits] - state.position[:2]).T)
@@ -494,7 +492,7 @@ class RobotDetector:
         ``R (1, (cx - u)/fx, (cy - v)/fy)`` vanishes; rows below it look down.
         """
         cam = self.camera
-        r = self._rotation(state)[2]
+        r = state.rotation()[2]
         if r[2] <= 1e-9:  # camera upside down or looking straight up/down: no clean horizon
             return np.zeros(len(columns))
         return np.asarray(
@@ -602,7 +600,7 @@ class RobotDetector:
         lower edge of row ``ends - 1``); inf where that edge lies above the horizon."""
         cam = self.camera
         pixels = np.column_stack([columns.astype(np.float64), ends - 0.5])
-        rays = pixel_rays(pixels, cam.fx, cam.fy, cam.cx, cam.cy) @ self._rotation(state).T
+        rays = pixel_rays(pixels, cam.fx, cam.fy, cam.cx, cam.cy) @ state.rotation().T
         xy, hits = ray_ground_intersection(state.position, rays)
         return np.where(hits, np.hypot(xy[:, 0], xy[:, 1]), np.inf)
 
@@ -639,8 +637,7 @@ class RobotDetector:
         # line 3: shrink the bottom and sides while mostly green
         top, bottom, left, right = 0, green.shape[0] - 1, 0, green.shape[1] - 1
         fraction = cfg.shrink_green_fraction
-        while bottom > top and green[bottom, left : right + 1].mean() >= fraction:
-            bottom -= 1
+        bottom = _last_below(green.mean(axis=1), fraction, top, bottom)
         # not in the seed: a field line running from under the feet towards the camera is not
         # the robot: bottom rows no wider than ``line_across_factor`` line widths, covering
         # ``min_line_m`` of ground or more (a leg's tapering corner covers less)
@@ -655,10 +652,9 @@ class RobotDetector:
         near = distance[bottom]  # inf for a bottom row above the horizon: no ground, no line
         if math.isfinite(near) and distance[end] - near >= cfg.min_line_m:
             bottom = end
-        while left < right and green[top : bottom + 1, left].mean() >= fraction:
-            left += 1
-        while right > left and green[top : bottom + 1, right].mean() >= fraction:
-            right -= 1
+        column_green = green[top : bottom + 1].mean(axis=0)
+        left = _first_below(column_green, fraction, left, right)
+        right = _last_below(column_green, fraction, left, right)
         u0, u1, v1 = u0 + left, u0 + right, v0 + bottom
         box = np.array([u0, v0, u1 + 1, v1 + 1], dtype=np.float64) - 0.5
         cut = v1 >= cam.height - 1 - cfg.bottom_margin_px
@@ -676,7 +672,7 @@ class RobotDetector:
         body = ~green[top : bottom + 1, left : right + 1]
         filled = body.any(axis=1)
         spans = (body.shape[1] - np.argmax(body[:, ::-1], axis=1) - np.argmax(body, axis=1))[filled]
-        row_width_px = float(np.percentile(spans, 75)) if len(spans) else 0.0
+        row_width_px = _upper_quartile(spans) if len(spans) else 0.0
 
         def reject(reason: str, team: int | None = None) -> list[RobotCandidate]:
             return [RobotCandidate(box, base, cut, team, reason, None)]
@@ -774,7 +770,7 @@ class RobotDetector:
         window = self._window(cols, cfg.team_search_margin * size + 2.0)
         inner = (math.floor(cols[0] - 0.25 * size), math.ceil(cols[1] + 0.25 * size))
         best: tuple[int, _Cluster] | None = None
-        min_rows = int(np.clip(round(cam.fy * cfg.team_min_height_m / depth), 1, 5))
+        min_rows = min(max(round(cam.fy * cfg.team_min_height_m / depth), 1), 5)
         max_width = cfg.team_max_width * size
         for team, ranges in enumerate(self._teams):
             found = self._cluster(
@@ -939,16 +935,10 @@ class RobotDetector:
         """Robot-frame point (3,) at ``range_m``, ``bearing`` and ``height_m``."""
         return np.array([range_m * math.cos(bearing), range_m * math.sin(bearing), height_m])
 
-    def _rotation(self, state: CameraState) -> FloatArray:
-        """``state.rotation()``, remembered for the last state (one frame asks many times)."""
-        if self._rotation_of is not state:
-            self._rotation_of, self._rotation_value = state, state.rotation()
-        return self._rotation_value
-
     def _depth(self, state: CameraState, range_m: float, bearing: float) -> float:
         """Distance (m) along the optical axis of the ground point at ``range_m``, ``bearing``."""
         offset = self._point(range_m, bearing, 0.0) - state.position
-        return float(self._rotation(state)[:, 0] @ offset)
+        return float(state.rotation()[:, 0] @ offset)
 
     def _row_at_height(
         self, state: CameraState, range_m: float, bearing: float, height_m: float
@@ -958,7 +948,7 @@ class RobotDetector:
         down at a near robot: the point is above its view)."""
         cam = self.camera
         offset = self._point(range_m, bearing, height_m) - state.position
-        uv, front = project_points(offset @ self._rotation(state), cam.fx, cam.fy, cam.cx, cam.cy)
+        uv, front = project_points(offset @ state.rotation(), cam.fx, cam.fy, cam.cx, cam.cy)
         return float(uv[0, 1]) if front[0] else -1.0
 
     def _covariance(
@@ -985,6 +975,30 @@ class RobotDetector:
         if not (np.isfinite(total).all() and total[0, 0] > 0 and np.linalg.det(total) > 0):
             return None
         return total
+
+
+def _upper_quartile(values: NDArray[np.intp]) -> float:
+    """``np.percentile(values, 75)`` of whole numbers (N,), N >= 1, without its overhead: the
+    linear interpolation at 0.75 (N - 1) between the sorted values, exact for these."""
+    ordered = np.sort(values)
+    position = 0.75 * (len(ordered) - 1)
+    low = int(position)
+    high = min(low + 1, len(ordered) - 1)
+    return float(ordered[low] + (ordered[high] - ordered[low]) * (position - low))
+
+
+def _last_below(shares: FloatArray, fraction: float, low: int, high: int) -> int:
+    """The last index in ``low + 1 .. high`` whose share (of ``shares``) is below ``fraction``,
+    or ``low``: where shrinking from ``high`` while the share reaches ``fraction`` stops."""
+    below = np.flatnonzero(shares[low + 1 : high + 1] < fraction)
+    return low + 1 + int(below[-1]) if below.size else low
+
+
+def _first_below(shares: FloatArray, fraction: float, low: int, high: int) -> int:
+    """The first index in ``low .. high - 1`` whose share is below ``fraction``, or ``high``:
+    where shrinking from ``low`` while the share reaches ``fraction`` stops."""
+    below = np.flatnonzero(shares[low:high] < fraction)
+    return low + int(below[0]) if below.size else high
 
 
 def _carpet_green(
