@@ -229,7 +229,8 @@ class RobotEnv(gym.Env[dict[str, Any], np.ndarray], Generic[StateT]):
     # ----- inspection ---------------------------------------------------------------------
     @property
     def sensor_frame(self) -> SensorFrame:
-        """What our robot's sensors delivered in the last step (for testing perception)."""
+        """What our robot's sensors delivered in the last step (for testing perception): the
+        sonar only where perception or the observation reads it."""
         return self._current()[1]
 
     @property

@@ -36,7 +36,9 @@ _PERCEPTION_DOC = """
     velocity jump, our own kicks known). ``ball_frontend="cnn"`` (the top camera only) or
     ``"oracle"`` (truth plus noise) for ablations; the geometric camera mode
     (``camera_mode="geometric", frontend="colour"``) emulates both cameras' ball sightings with
-    the CNN's measured recall and noise (:mod:`spl_env.sensors.emulation.ball`).
+    the CNN's measured recall and noise (:mod:`spl_env.sensors.emulation.ball`), and the robot
+    sightings' sonar check from the sonar's model, so the rig then measures no sonar
+    (``sensor_frame.sonar`` is None).
 
     **Action**: ``Box(-1, 1, (5,), float32)``, or ``(7,)`` with ``head_control="action"``; the
     table is in :mod:`spl_env.tasks.soccer`: walk ``(vx, vy, omega)`` of the speed limits, kick
