@@ -18,6 +18,7 @@ from spl_env.scenes.spl_field import (
     build_scene,
 )
 from spl_env.sensors.camera import Camera, CameraConfig, EpisodeLighting
+from spl_env.sensors.sonar import Sonar, SonarConfig
 from spl_env.sim.world import MAX_PARTS_PER_BODY, BulletWorld, VisualPart
 
 SCENE = SceneConfig()
@@ -278,3 +279,32 @@ def test_camera_pose_follows_every_part_of_the_robot_state(scene) -> None:
         robot.camera_state().position[0] = 0.0
     robot.config = RobotConfig()
     robot.place(np.zeros(3))
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="known defect (README, design notes): the sonar's rays start inside the legs' boxes "
+    "and, while the torso sways, Bullet stops some on our own body at distance 0",
+)
+def test_a_walking_nao_hears_a_wall_ahead_in_every_frame() -> None:
+    """A wall 0.9 m in front of the sonar, no dropout: every sector hears it in every frame,
+    standing (it does) and swaying through the gait (it does not, yet)."""
+    world = BulletWorld(time_step_s=0.01)
+    robot = NaoRobot(world, "self", team=0, config=RobotConfig())
+    grey = (0.5, 0.5, 0.5, 1.0)
+    wall = VisualPart(shape="box", size=(0.05, 2.0, 0.5), position=(1.0, 0.0, 0.5), rgba=grey)
+    world.add_static("wall", [wall])
+    sonar = Sonar(SonarConfig(dropout_probability=0.0))
+    rng = np.random.default_rng(0)
+    robot.place(np.zeros(3))
+    deaf_standing = np.isnan(sonar.measure(world.ray_test, robot.pose, rng, world.body("self")))
+    assert not deaf_standing[:, 0].any()
+    robot.velocity = np.array([0.25, 0.0, 0.0])  # full speed ahead: the most sway
+    deaf_frames = 0
+    for k in range(100):
+        robot.gait_phase = (0.37 * k) % (2 * math.pi)
+        robot.sync()
+        echoes = sonar.measure(world.ray_test, robot.pose, rng, world.body("self"))
+        deaf_frames += bool(np.isnan(echoes[:, 0]).any())
+    world.close()
+    assert deaf_frames == 0
