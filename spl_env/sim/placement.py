@@ -15,7 +15,7 @@ from typing import Protocol
 
 import numpy as np
 
-from perception.geometry import FloatArray
+from perception.geometry import FloatArray, compose
 
 
 class Area(Protocol):
@@ -70,15 +70,13 @@ class Placement:
         self.obstacles = np.asarray(obstacles, dtype=np.float64).reshape(-1, 3)
         self.robot_radius_m = robot_radius_m
 
-    def collides(
-        self, xy: Sequence[float] | FloatArray, robots: Sequence[Mobile], clearance: float
-    ) -> bool:
+    def collides(self, xy: FloatArray, robots: Sequence[Mobile], clearance: float) -> bool:
         """Whether a robot at ``xy`` (2,) overlaps one of ``robots``, a post or a pole, or leaves
         the carpet, with ``clearance`` (m) to spare."""
         return self.obstruction(xy, robots, clearance) is not None
 
     def obstruction(
-        self, xy: Sequence[float] | FloatArray, robots: Sequence[Mobile], clearance: float
+        self, xy: FloatArray, robots: Sequence[Mobile], clearance: float
     ) -> FloatArray | None:
         """Where a robot at ``xy`` (2,) would touch what it overlaps (with ``clearance`` m to
         spare): the point (2,) (m) of the carpet's edge it crosses, or the centre of the first
@@ -129,10 +127,7 @@ class Placement:
         ran into (:meth:`obstruction`), so that a Nao may pivot away from it.
         """
         increment = robot.walk_step(command, dt_s)
-        x, y, heading = robot.pose.tolist()
-        c, s = math.cos(heading), math.sin(heading)
-        ahead, left = increment[0], increment[1]
-        new_xy = (x + c * ahead - s * left, y + s * ahead + c * left)
+        new_xy = compose(robot.pose, increment)[:2]
         contact = self.obstruction(new_xy, others, clearance=0.0)
         if contact is None:
             robot.commit_motion(increment)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -129,3 +130,15 @@ def test_ground_projection_of_pitched_camera() -> None:
 def test_camera_model_rejects_bad_values(kwargs: dict) -> None:
     with pytest.raises(ValueError, match=next(iter(kwargs))):
         CameraModel(**kwargs)
+
+
+def test_camera_state_rotation_is_computed_once_read_only_and_equal_per_state() -> None:
+    state = CameraState(position=np.array([0.0, 0.0, 0.5]), head_yaw=0.3, head_pitch=0.2, tilt=0.1)
+    rotation = state.rotation()
+    np.testing.assert_array_equal(rotation, camera_rotation(0.3, 0.2 + 0.1))
+    assert state.rotation() is rotation
+    with pytest.raises(ValueError):
+        rotation[0, 0] = 1.0
+    turned = dataclasses.replace(state, head_yaw=-0.3)  # a new state: its own rotation
+    np.testing.assert_array_equal(turned.rotation(), camera_rotation(-0.3, 0.2 + 0.1))
+    assert "_rotation" not in repr(turned)  # the cache is no field

@@ -365,3 +365,24 @@ def test_a_near_pole_seen_steeply_from_above_is_still_a_pole(detector: RobotDete
     image = draw(solids=post(0.5, 0.0, ("pink", "pole_blue")), state=steep)
     (candidate,) = detector.candidates(image, steep)
     assert candidate.box[1] < 0 and candidate.rejected == "pole"
+
+
+def test_box_shrinking_helpers_match_np_percentile_and_the_shrinking_loops() -> None:
+    """The upper quartile equals ``np.percentile(..., 75)``; the shrink helpers stop where
+    the one-row-at-a-time loops of Algorithm 2's line 3 stop."""
+    from perception.vision.robots import _first_below, _last_below, _upper_quartile
+
+    rng = np.random.default_rng(3)
+    for _ in range(500):
+        widths = rng.integers(0, 200, size=int(rng.integers(1, 60)))
+        assert _upper_quartile(widths) == float(np.percentile(widths, 75))
+        shares = rng.choice([0.2, 0.5, 0.9, 1.0], size=int(rng.integers(2, 30)))
+        low, high = 0, len(shares) - 1
+        bottom = high
+        while bottom > low and shares[bottom] >= 0.7:
+            bottom -= 1
+        assert _last_below(shares, 0.7, low, high) == bottom
+        left = low
+        while left < high and shares[left] >= 0.7:
+            left += 1
+        assert _first_below(shares, 0.7, low, high) == left
