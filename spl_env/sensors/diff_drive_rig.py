@@ -10,6 +10,7 @@ sonar and laser noise come from the one handed to :meth:`DiffDriveRig.sense`.
 
 from __future__ import annotations
 
+import functools
 import time
 from dataclasses import dataclass, field
 
@@ -71,12 +72,13 @@ class DiffDriveRig:
         robot = self.robot
         ticks = self.encoders.measure(wheel_rotations_rad)
         self_id = world.body(robot.name)
+        rays = functools.partial(world.ray_test, transparent_body=self_id)  # not on our own limbs
         sonar = (
-            self.sonar.measure(world.ray_test, robot.pose, rng, ignore_body=self_id)
+            self.sonar.measure(rays, robot.pose, rng)
             if self.sonar is not None
             else None
         )
-        laser = self.laser.measure(world.ray_test, robot.pose, rng, ignore_body=self_id)
+        laser = self.laser.measure(rays, robot.pose, rng)
         frame = SensorFrame(
             time_s=time_s,
             odometry_delta=dead_reckoning_increment(ticks, robot.config),

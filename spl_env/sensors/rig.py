@@ -11,6 +11,7 @@ draws from the generator handed to :meth:`NaoRig.reset`, everything else from th
 from __future__ import annotations
 
 import dataclasses
+import functools
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -158,13 +159,14 @@ class NaoRig:
                 emulated[name] = emulator.observe(world, robot, camera_state, rng, blur)
         t1 = time.perf_counter()
         self_id = world.body(robot.name)
+        rays = functools.partial(world.ray_test, transparent_body=self_id)  # not on our own limbs
         sonar = (
-            self.sonar.measure(world.ray_test, robot.pose, rng, ignore_body=self_id)
+            self.sonar.measure(rays, robot.pose, rng)
             if self.sonar is not None
             else None
         )
         laser = (
-            self.laser.measure(world.ray_test, robot.pose, rng, ignore_body=self_id)
+            self.laser.measure(rays, robot.pose, rng)
             if self.laser is not None
             else None
         )

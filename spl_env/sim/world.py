@@ -25,6 +25,10 @@ from perception.validation import check_finite, check_positive, finite_points, f
 MAX_PARTS_PER_BODY = 16  # PyBullet's shape arrays crash beyond 16 shapes
 REST_SPEED = 1e-6  # m/s and rad/s: a dynamic body this slow in contact lies at rest
 REST_CLEARANCE_M = 0.05  # a moved body this near a resting one could touch it in a step
+# Bullet's collision filter groups: bit 0 marks dynamic bodies and bit 1 static ones (its
+# defaults); a body that ray tests pass through gets a private bit from those above.
+STATIC_FILTER = 1 << 1
+PRIVATE_FILTER_BITS = tuple(1 << k for k in range(2, 31))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -135,6 +139,7 @@ class BulletWorld:
         self._dynamic: list[int] = []  # bodies with mass, which the physics moves
         self._moved: set[int] = set()  # bodies moved by hand (set_pose, set_joint) ever
         self._disturbed = False  # a dynamic body was set by hand since the last physics step
+        self._filter_bits: dict[int, int] = {}  # body id -> its private collision filter group
         self.time_step_s = time_step_s
         p.setGravity(0.0, 0.0, -gravity_mps2, physicsClientId=self.client)
         p.setTimeStep(time_step_s, physicsClientId=self.client)
@@ -528,12 +533,15 @@ class BulletWorld:
 
     # ----- sensing ------------------------------------------------------------------------
     def ray_test(
-        self, starts: FloatArray, ends: FloatArray
+        self, starts: FloatArray, ends: FloatArray, *, transparent_body: int = -1
     ) -> tuple[FloatArray, NDArray[np.int64]]:
         """Batched ray casts: (N, 3) starts and ends -> hit fractions (N,) and body ids (N,).
 
-        A fraction of 1.0 with body id -1 means no hit.
+        A fraction of 1.0 with body id -1 means no hit. The rays pass through
+        ``transparent_body`` (-1: none), such as the robot whose sensor casts them: its own
+        limbs, swaying about the sensor, must not stop them.
         """
+        mask = -1 if transparent_body < 0 else ~self._filter_bit(transparent_body)
         n = len(starts)
         fractions = np.ones(n)
         ids = np.full(n, -1, dtype=np.int64)
@@ -542,12 +550,34 @@ class BulletWorld:
             hits = p.rayTestBatch(
                 starts[lo : lo + batch].tolist(),
                 ends[lo : lo + batch].tolist(),
+                collisionFilterMask=mask,
                 physicsClientId=self.client,
             )
             body = np.array([hit[0] for hit in hits], dtype=np.int64)
             ids[lo : lo + batch] = body
             fractions[lo : lo + batch] = np.where(body >= 0, [hit[2] for hit in hits], 1.0)
         return fractions, ids
+
+    def _filter_bit(self, body_id: int) -> int:
+        """The private collision filter group of ``body_id``, given to it (base and links) on
+        first use. The body still collides with what it did: dynamic bodies with everything,
+        kinematic ones (robots) with everything but the static scene, as by Bullet's defaults."""
+        if body_id not in self._filter_bits:
+            if body_id not in self._bodies.values():
+                raise ValueError(f"transparent_body must be a body of this world, got {body_id}")
+            if len(self._filter_bits) == len(PRIVATE_FILTER_BITS):
+                raise RuntimeError(
+                    f"at most {len(PRIVATE_FILTER_BITS)} bodies can be transparent to ray tests"
+                )
+            bit = PRIVATE_FILTER_BITS[len(self._filter_bits)]
+            collides_with = -1 if body_id in self._dynamic else ~STATIC_FILTER
+            client = self.client
+            for link in range(-1, p.getNumJoints(body_id, physicsClientId=client)):
+                p.setCollisionFilterGroupMask(
+                    body_id, link, bit, collides_with, physicsClientId=client
+                )
+            self._filter_bits[body_id] = bit
+        return self._filter_bits[body_id]
 
     def render(
         self,

@@ -2,7 +2,10 @@
 
 ``reference/active_vision_v0_reference.npz`` was written by this module's :func:`main`
 (``python tests/spl_env/test_reference_rollouts.py PATH``) at the commit before the reshaping
-(``SplSimulation`` and the old pipeline, commit b95a6d7): for the same seed and actions, today's
+(``SplSimulation`` and the old pipeline, commit b95a6d7), and the reshaped env matched it to
+1e-9 through commit 76aec20. It was recorded again when the sonar's rays began to pass through
+our own robot's body (which until then stopped some of them while the torso swayed): what the
+sonar hears changed, and with it the random stream. For the same seed and actions, today's
 observations, rewards, SLAM poses and true poses must match it to 1e-9. The default (CNN)
 front end runs a torch network whose float32 kernels round differently on different CPU
 instruction sets (AVX2 / AVX-512): that case is held to 1e-6, a few float32 ulps.
