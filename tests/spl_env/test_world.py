@@ -311,8 +311,9 @@ def test_a_walking_nao_hears_a_wall_ahead_in_every_frame() -> None:
 
 def test_rays_pass_through_the_transparent_body_alone_and_it_still_collides() -> None:
     """A ray along the x axis through a robot to a wall: it stops on the robot unless the robot
-    is transparent to it; other rays still stop on the robot; and a ball rolled at the
-    transparent robot still bounces off it, while a transparent ball still lies on the floor."""
+    is transparent to it, after a restored snapshot too; other rays still stop on the robot;
+    and a ball rolled at the transparent robot still bounces off it, while a transparent ball
+    still lies on the floor."""
     world = BulletWorld(time_step_s=0.01)
     robot = NaoRobot(world, "self", team=0, config=RobotConfig())
     robot.place(np.zeros(3))
@@ -323,11 +324,14 @@ def test_rays_pass_through_the_transparent_body_alone_and_it_still_collides() ->
     world.add_static("floor", [floor])
     start, end = np.array([[-0.5, 0.0, 0.3]]), np.array([[1.5, 0.0, 0.3]])
     self_id, wall_id = world.body("self"), world.body("wall")
+    before_anything = world.save_state()  # an env's episode start, restored at each reset
     _, opaque = world.ray_test(start, end)
     fraction, through = world.ray_test(start, end, transparent_body=self_id)
     _, still_opaque = world.ray_test(start, end)
     assert opaque[0] == self_id and still_opaque[0] == self_id
     assert through[0] == wall_id
+    world.restore_state(before_anything)
+    assert world.ray_test(start, end, transparent_body=self_id)[1][0] == wall_id
     assert 2.0 * fraction[0] == pytest.approx(1.5 - 0.05, abs=1e-6)  # the wall's near face
     with pytest.raises(ValueError, match="transparent_body"):
         world.ray_test(start, end, transparent_body=999)
