@@ -66,7 +66,9 @@ class Laser:
     ) -> FloatArray:
         """Ranges (n_beams,) (m) from the scanner centre, NaN where no return.
 
-        ``ignore_body`` is the robot's own body id, whose hits count as no return.
+        ``ignore_body`` is the robot's own body id, whose hits count as no return, for a
+        ``ray_caster`` that cannot pass through it (the rigs cast through their own robot
+        instead: ``BulletWorld.ray_test(..., transparent_body=...)``).
         """
         m = self.model
         distances, _ = cast(ray_caster, *self.rays(robot_pose), ignore_body)

@@ -70,7 +70,9 @@ class RingSonar:
     ) -> FloatArray:
         """Ranges (S,) (m) of the sonars in ring order, NaN where nothing was heard in range.
 
-        ``ignore_body`` is the robot's own body id, whose hits count as no echo.
+        ``ignore_body`` is the robot's own body id, whose hits count as no echo, for a
+        ``ray_caster`` that cannot pass through it (the rigs cast through their own robot
+        instead: ``BulletWorld.ray_test(..., transparent_body=...)``).
         """
         distances, _ = cast(ray_caster, *self.rays(robot_pose), ignore_body)
         per_sonar = distances.reshape(len(self.robot.sonar_ring), self.config.rays_per_sonar)

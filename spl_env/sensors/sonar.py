@@ -90,7 +90,9 @@ class Sonar:
         """Echo distances (3, max_echoes) (m) of the left, middle and right sectors.
 
         Each row is sorted nearest first and NaN-padded. ``ignore_body`` is the robot's own body
-        id, whose hits count as no echo.
+        id, whose hits count as no echo, for a ``ray_caster`` that cannot pass through it (the
+        rigs cast through their own robot instead: ``BulletWorld.ray_test(...,
+        transparent_body=...)``).
         """
         starts, ends = self.rays(robot_pose)
         distances, bodies = cast(ray_caster, starts, ends, ignore_body)

@@ -9,6 +9,7 @@ state is exact; the sonar is the env's own ray-cast sonar with its noise.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterator
 from typing import Any
 
@@ -45,9 +46,8 @@ def scene() -> Iterator[tuple[Any, dict[str, Any]]]:
     rng = np.random.default_rng(3)
     sonar = SonarFilter(u.config.perception.sonar_filter)
     for k in range(SONAR_SWEEPS):
-        reading = u.rig.sonar.measure(
-            u.world.ray_test, OURS, rng, ignore_body=u.world.body(u.robots[0].name)
-        )
+        rays = functools.partial(u.world.ray_test, transparent_body=u.world.body(u.robots[0].name))
+        reading = u.rig.sonar.measure(rays, OURS, rng)
         observations = sonar.update(0.1 * k, reading)
     inputs = {
         "image": image,
