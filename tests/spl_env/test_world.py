@@ -20,7 +20,7 @@ from spl_env.scenes.spl_field import (
 )
 from spl_env.sensors.camera import Camera, CameraConfig, EpisodeLighting
 from spl_env.sensors.sonar import Sonar, SonarConfig
-from spl_env.sim.world import MAX_PARTS_PER_BODY, BulletWorld, VisualPart
+from spl_env.sim.world import MAX_PARTS_PER_BODY, PRIVATE_FILTER_BITS, BulletWorld, VisualPart
 
 SCENE = SceneConfig()
 
@@ -353,4 +353,21 @@ def test_rays_pass_through_the_transparent_body_alone_and_it_still_collides() ->
     x, _, z = world.position("ball")
     assert x < -0.05  # stopped by the robot's legs, which reach about 0.05 m behind its origin
     assert z == pytest.approx(radius, abs=2e-3)  # on the floor, not through it
+    world.close()
+
+
+def test_at_most_the_private_filter_bits_worth_of_bodies_become_transparent() -> None:
+    """Each transparent body takes one of Bullet's 29 free collision filter bits; the 30th is
+    refused with a clear error rather than sharing a bit (which would hide one from the
+    other's rays)."""
+    world = BulletWorld(time_step_s=0.01)
+    grey = (0.5, 0.5, 0.5, 1.0)
+    start, end = np.zeros((1, 3)), np.ones((1, 3))
+    for k in range(len(PRIVATE_FILTER_BITS) + 1):
+        part = VisualPart(shape="box", size=(0.1, 0.1, 0.1), position=(k, 5.0, 0.1), rgba=grey)
+        body = world.add_static(f"box{k}", [part])
+        if k < len(PRIVATE_FILTER_BITS):
+            world.ray_test(start, end, transparent_body=body)
+    with pytest.raises(RuntimeError, match="at most 29 bodies"):
+        world.ray_test(start, end, transparent_body=body)
     world.close()
