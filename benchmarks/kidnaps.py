@@ -10,14 +10,16 @@ perception (:meth:`spl_env.robots.nao.NaoRobot.place`). At the end of each inter
 position error of the believed pose, and whether it lies on the correct end, nearer the true
 pose than its twin through the centre spot (the field's symmetry), and how many of the
 recogniser's observations of the end the camera faces were right and wrong (against the true
-camera heading) after the walk-on. The same episodes without
-natural landmarks (``field_end="none"``) beside it: the field features alone relocalise on the
-truth or its twin. Seeds 0-4 are for tuning; 100 and up are held out.
+camera heading) after the walk-on. The same episodes beside it with the recogniser's
+database filled on the walk-on alone, as in the seed (``perception.natural_landmarks
+.learn_in_play=False``; by default views are stored in play too), and without natural
+landmarks (``field_end="none"``): the field features alone relocalise on the truth or its
+twin. Seeds 0-4 are for tuning; 100 and up are held out.
 
-Per kidnap the JSON also holds what the walk-on stored (views facing each goal) and the
-interval's trace: each field-end observation (time, end, right?, net votes) and each
-relocalisation or half turn of the pose filter (time, on the correct end after it?).
-``--variant`` runs one localisation only.
+Per kidnap the JSON also holds what the walk-on stored (views facing each goal), the views
+stored in play so far (``learned``) and the interval's trace: each field-end observation
+(time, end, right?, net votes) and each relocalisation or half turn of the pose filter (time,
+on the correct end after it?). ``--variant`` runs one localisation only.
 
 Seeds ``--seed`` .. ``--seed + --episodes - 1`` (100-101 by default: held out), ``--kidnaps``
 per episode (the seed: 10 kidnaps).
@@ -51,10 +53,17 @@ from perception.representations import FIELD_END, SELF_POSE
 from spl_env.envs.core import SplEnv
 
 RESULTS = Path("benchmarks/results")
-VARIANTS = {"natural landmarks": "bag_of_words", "field features alone": "none"}
+VARIANTS: dict[str, dict[str, Any]] = {  # env overrides of each localisation
+    "natural landmarks": {"perception.field_end": "bag_of_words"},
+    "walk-on views only": {
+        "perception.field_end": "bag_of_words",
+        "perception.natural_landmarks.learn_in_play": False,
+    },
+    "field features alone": {"perception.field_end": "none"},
+}
 
 
-def episode(field_end: str, seed: int, args: argparse.Namespace) -> list[dict[str, Any]]:
+def episode(variant: dict[str, Any], seed: int, args: argparse.Namespace) -> list[dict[str, Any]]:
     """One episode's kidnaps: per kidnap the position error (m), whether the end is right, and
     the interval's trace (:func:`_trace_step`)."""
     steps_per_s = 10  # control steps of 0.1 s
@@ -65,7 +74,7 @@ def episode(field_end: str, seed: int, args: argparse.Namespace) -> list[dict[st
         body_behaviour="square",
         square_side_m=2.0,
         **{
-            "perception.field_end": field_end,
+            **variant,
             "perception.natural_landmarks.walk_on_s": args.walk_on,
             "perception.odometry": "visual",
             **args.set,
@@ -107,6 +116,7 @@ def episode(field_end: str, seed: int, args: argparse.Namespace) -> list[dict[st
                     "correct_end": bool(error < twin),
                     "end_observations": dict(seen),  # since the last kidnap
                     "database": database,
+                    "learned": getattr(core.pipeline.provider(FIELD_END), "learned", 0),
                     "trace": trace,
                 }
             )
@@ -188,12 +198,12 @@ def main() -> None:
     torch.set_num_threads(1)
     t0 = time.perf_counter()
     rows: dict[str, Any] = {}
-    for name, field_end in VARIANTS.items():
+    for name, variant in VARIANTS.items():
         if args.variant and name not in args.variant:
             continue
         kidnaps = []
         for k in range(args.episodes):
-            result = episode(field_end, args.seed + k, args)
+            result = episode(variant, args.seed + k, args)
             print(name, args.seed + k, json.dumps(result), flush=True)
             kidnaps += result
         correct = [r for r in kidnaps if r["correct_end"]]

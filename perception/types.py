@@ -348,3 +348,13 @@ class SlamEstimate:
     landmarks: FloatArray
     landmark_covs: FloatArray
     circles: tuple[MappedCircle, ...] = ()
+
+
+@dataclass(frozen=True, kw_only=True)
+class TrackedPoseEstimate(SlamEstimate):
+    """A :class:`SlamEstimate` of a filter that knows whether it is following the robot:
+    ``accepted`` is True when this frame brought a pose observation that the filter's gate
+    took (the frame's features agree with the pose it predicted), False when it brought none
+    or one the gate refused. The field-feature pose filter's estimate."""
+
+    accepted: bool = False

@@ -40,7 +40,7 @@ from collections import deque
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from perception.landmarks.bag_of_words import (
     Hit,
@@ -138,12 +138,15 @@ class FieldEndRecogniser:
         self._window: deque[int] = deque(maxlen=config.window)  # observations, 0 for none
         self._previous: IntArray | None = None  # last processed frame's counts
         self._previous_label: int | None = None  # ... and its label while building
+        # the last observed frame, if it may be remembered: (words, x, label, counts)
+        self._candidate: tuple[IntArray, NDArray[np.float64], int, IntArray] | None = None
 
     def reset(self) -> None:
         """Start of a half: clear the database, the window and the query expansion."""
         self.database.clear()
         self._window.clear()
         self._previous = self._previous_label = None
+        self._candidate = None
 
     def build(
         self, words: ArrayLike, x: ArrayLike, label: int, *, facing_goal: bool, post_visible: bool
@@ -156,18 +159,10 @@ class FieldEndRecogniser:
         if not (facing_goal and post_visible):
             self._previous = self._previous_label = None
             return False
-        check_int("FieldEndRecogniser.build", "label", label)
-        if label not in (AWAY, HOME):
-            raise ValueError(
-                f"FieldEndRecogniser.build.label must be AWAY ({AWAY}) or HOME ({HOME}), "
-                f"got {label!r}"
-            )
+        _check_label("FieldEndRecogniser.build", label)
         counts = self._expanded(words, same_label=label)
         self._previous_label = label
-        if (
-            len(self.database) >= self.config.max_size
-            or self.database.count(label) >= self.config.max_per_goal
-        ):
+        if not self._has_room(label):
             return False
         hits = self.database.query(words, x, self.rng, counts)
         if len(hits) >= self.config.min_response:
@@ -175,15 +170,33 @@ class FieldEndRecogniser:
         self.database.add(words, x, label, counts)
         return True
 
-    def observe(self, words: ArrayLike, x: ArrayLike, *, facing_goal: bool) -> FieldEndBelief:
+    def observe(
+        self, words: ArrayLike, x: ArrayLike, *, facing_goal: bool, label: int = 0
+    ) -> FieldEndBelief:
         """Play frame with features' words (N,) and columns ``x`` (N,) (px): the belief after
-        it. A frame not facing a goal area adds no observation but still ages the window."""
+        it. A frame not facing a goal area adds no observation but still ages the window.
+
+        ``label`` (:data:`AWAY` or :data:`HOME`; 0, the default: unknown) is the goal area the
+        caller believes the camera faces; a frame so labelled that draws fewer than
+        ``min_response`` hits, as a walk-on frame must to be stored, becomes the candidate
+        that :meth:`remember` stores once the caller has confirmed the label (the next
+        observed frame replaces it)."""
         check_bool("FieldEndRecogniser.observe", "facing_goal", facing_goal)
+        if label:
+            _check_label("FieldEndRecogniser.observe", label)
         hits: tuple[Hit, ...] = ()
+        self._candidate = None
         if facing_goal:
             counts = self._expanded(words, same_label=None)
             self._previous_label = None
             hits = self.database.query(words, x, self.rng, counts)
+            if label and len(hits) < self.config.min_response:
+                self._candidate = (
+                    np.asarray(words, dtype=np.int64),
+                    np.asarray(x, dtype=np.float64),
+                    label,
+                    counts,
+                )
         else:
             self._previous = self._previous_label = None
         votes = self._votes(hits)
@@ -207,6 +220,24 @@ class FieldEndRecogniser:
             observation=observation,
         )
 
+    def remember(self) -> bool:
+        """Store the last observed frame's candidate view (:meth:`observe`) with its label,
+        if the database has room for it (``max_size``, ``max_per_goal``); it is then no longer
+        a candidate. Returns whether it was stored."""
+        candidate, self._candidate = self._candidate, None
+        if candidate is None or not self._has_room(candidate[2]):
+            return False
+        words, x, label, counts = candidate
+        self.database.add(words, x, label, counts)
+        return True
+
+    def _has_room(self, label: int) -> bool:
+        """Whether the database may store another view of the ``label`` goal."""
+        return (
+            len(self.database) < self.config.max_size
+            and self.database.count(label) < self.config.max_per_goal
+        )
+
     def _votes(self, hits: tuple[Hit, ...]) -> float:
         """Net votes for the away goal: +1 per away hit, -1 per home hit, each scaled by
         ``(N / 2) / N_label`` (``N`` images stored, ``N_label`` of the hit's label) when
@@ -228,3 +259,10 @@ class FieldEndRecogniser:
         if previous is None or (same_label is not None and same_label != self._previous_label):
             return counts
         return counts + previous
+
+
+def _check_label(owner: str, label: int) -> None:
+    """Refuse a ``label`` that is neither :data:`AWAY` nor :data:`HOME`."""
+    check_int(owner, "label", label)
+    if label not in (AWAY, HOME):
+        raise ValueError(f"{owner}.label must be AWAY ({AWAY}) or HOME ({HOME}), got {label!r}")

@@ -37,7 +37,7 @@ from perception.representations import (
     SELF_POSE,
     Prior,
 )
-from perception.types import CameraModel, GroundTruth, SlamEstimate
+from perception.types import CameraModel, GroundTruth, TrackedPoseEstimate
 from perception.validation import check_in_interval, check_int, check_positive
 from perception.vision.field_features import FieldFeatureConfig, detect_field_features
 
@@ -214,24 +214,27 @@ class FieldFeaturePose(Provider):
         self._agreement.clear()
         self.relocalisations = self.half_turns = 0
 
-    def update(self, inputs: Mapping[str, Any], time_s: float) -> SlamEstimate:
+    def update(self, inputs: Mapping[str, Any], time_s: float) -> TrackedPoseEstimate:
         pose_filter = self.filter
         pose_filter.predict(inputs[ODOMETRY].delta)
         self._weigh_the_field_end(inputs[FIELD_END], inputs["camera_state"].head_yaw)
         features = inputs[FIELD_FEATURES]
+        accepted = False
         if features:
             result = observe_pose(features, pose_filter.pose, self.field_map, self.model)
             if result.observation is not None:
-                self._refused = 0 if pose_filter.update(result.observation) else self._refused + 1
+                accepted = pose_filter.update(result.observation)
+                self._refused = 0 if accepted else self._refused + 1
             limit = self.relocalisation.after_refused_frames
             if limit and self._refused >= limit:
                 self._relocalise(features)
-        return SlamEstimate(
+        return TrackedPoseEstimate(
             pose=pose_filter.pose,
             pose_cov=pose_filter.cov,
             landmark_ids=np.zeros(0, dtype=np.int64),
             landmarks=np.zeros((0, 2)),
             landmark_covs=np.zeros((0, 2, 2)),
+            accepted=accepted,
         )
 
     def _weigh_the_field_end(self, belief: FieldEndBelief, head_yaw: float) -> None:

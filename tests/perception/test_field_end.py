@@ -158,6 +158,39 @@ def test_building_needs_a_goal_area_and_a_visible_post() -> None:
     assert len(r.database) == 0
 
 
+def test_a_labelled_play_frame_with_few_hits_is_remembered_only_when_asked() -> None:
+    r = with_two_goals(min_response=2)
+    assert not r.remember()  # nothing observed yet: no candidate
+    r.observe(view(2), COLUMNS, facing_goal=True, label=AWAY)  # new words: no hit
+    assert len(r.database) == 2  # observing alone stores nothing
+    assert r.remember() and len(r.database) == 3 and r.database.count(AWAY) == 2
+    assert not r.remember()  # stored once
+    # a frame without a label, or one not facing a goal, leaves no candidate
+    r.observe(view(3), COLUMNS, facing_goal=True)
+    assert not r.remember()
+    r.observe(view(4), COLUMNS, facing_goal=False, label=HOME)
+    assert not r.remember()
+    # the next observed frame replaces the candidate
+    r.observe(view(5), COLUMNS, facing_goal=True, label=HOME)
+    r.observe(view(2), COLUMNS, facing_goal=False)
+    assert not r.remember() and len(r.database) == 3
+
+
+def test_a_play_frame_that_draws_min_response_hits_is_no_candidate() -> None:
+    r = with_two_goals(min_response=1)
+    r.observe(view(0), COLUMNS + 3.0, facing_goal=True, label=AWAY)  # one hit: image 0
+    assert not r.remember() and len(r.database) == 2
+
+
+def test_remembering_keeps_to_the_database_limits() -> None:
+    r = with_two_goals(max_per_goal=1)
+    r.observe(view(2), COLUMNS, facing_goal=True, label=HOME)  # HOME holds its one view
+    assert not r.remember() and r.database.count(HOME) == 1
+    r = with_two_goals(max_size=2)
+    r.observe(view(2), COLUMNS, facing_goal=True, label=AWAY)
+    assert not r.remember() and len(r.database) == 2
+
+
 @pytest.mark.parametrize(
     ("kwargs", "field"),
     [
@@ -181,6 +214,8 @@ def test_bad_arguments_are_refused() -> None:
         r.build(view(0), COLUMNS, 0, facing_goal=True, post_visible=True)
     with pytest.raises(TypeError, match="facing_goal"):
         r.observe(view(0), COLUMNS, facing_goal=1)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match=r"observe\.label"):
+        r.observe(view(0), COLUMNS, facing_goal=True, label=2)
     with pytest.raises(TypeError, match="balance_votes"):
         FieldEndConfig(balance_votes=1)  # type: ignore[arg-type]
     with pytest.raises(TypeError, match="retrieval"):

@@ -25,18 +25,19 @@ from perception.representations import (
     SELF_POSE,
     Prior,
 )
-from perception.types import CameraModel, PoleGeometry, SlamEstimate
+from perception.types import CameraModel, PoleGeometry, SlamEstimate, TrackedPoseEstimate
 
 WORDS = default_vocabulary().words
 CONTEXT = PerceptionContext(CameraModel(), (), PoleGeometry())
 POST = FieldFeature("goal_post", np.array([[2.0, 0.1]]), 1e-4 * np.eye(2)[None])
 
 
-def view(end: int, shift_px: float = 0.0) -> HorizonFeatures:
+def view(end: int, shift_px: float = 0.0, *, novel: bool = False) -> HorizonFeatures:
     """A goal area's horizon: 40 features on distinct words (one end's words, the other's
-    another set) at spread columns, shifted by ``shift_px``."""
+    another set; ``novel``: a third set, a view from elsewhere) at spread columns, shifted by
+    ``shift_px``."""
     usable = np.flatnonzero(~default_vocabulary().stopped)
-    words = usable[:40] if end == AWAY else usable[40:80]
+    words = usable[80:120] if novel else usable[:40] if end == AWAY else usable[40:80]
     n = len(words)
     x = np.linspace(10.0, 300.0, n) + shift_px
     features = Surf1dFeatures(
@@ -61,6 +62,87 @@ def estimate(heading: float) -> SlamEstimate:
         landmarks=np.zeros((0, 2)),
         landmark_covs=np.zeros((0, 2, 2)),
     )
+
+
+def tracked(heading: float, *, accepted: bool, x: float = 0.0) -> TrackedPoseEstimate:
+    """The field-feature pose filter's estimate at (x, 0, heading); ``accepted``: it took the
+    frame's features."""
+    return TrackedPoseEstimate(
+        pose=np.array([x, 0.0, heading]),
+        pose_cov=np.eye(3) * 0.01,
+        landmark_ids=np.zeros(0, dtype=np.int64),
+        landmarks=np.zeros((0, 2)),
+        landmark_covs=np.zeros((0, 2, 2)),
+        accepted=accepted,
+    )
+
+
+def walked_on(config: FieldEndProviderConfig) -> NaturalLandmarkFieldEnd:
+    """A provider after a walk-on (``config.walk_on_s`` <= 1 s) of five views of each end."""
+    provider = NaturalLandmarkFieldEnd(config, CONTEXT)
+    provider.reset(Prior(pose=np.zeros(3), rng=np.random.default_rng(0)))
+    for end, heading in ((AWAY, 0.0), (HOME, math.pi)):
+        for k in range(5):
+            inputs = {
+                HORIZON_FEATURES: view(end, shift_px=2.0 * k),
+                FIELD_FEATURES: (),
+                PREVIOUS + SELF_POSE: tracked(heading, accepted=True),
+            }
+            provider.update(inputs, 0.1 * k)
+    return provider
+
+
+def play(
+    provider: NaturalLandmarkFieldEnd, time_s: float, seen: HorizonFeatures, pose: SlamEstimate
+) -> int:
+    """One play frame seeing ``seen`` after the estimate ``pose``: the database's size after."""
+    provider.update(
+        {HORIZON_FEATURES: seen, FIELD_FEATURES: (), PREVIOUS + SELF_POSE: pose}, time_s
+    )
+    return len(provider._recogniser.database)  # type: ignore[union-attr]
+
+
+@pytest.mark.parametrize(
+    ("learn_in_play", "accepted", "stored"), [(True, True, 1), (True, False, 0), (False, True, 0)]
+)
+def test_a_new_play_view_is_stored_once_the_pose_filter_took_its_frame(
+    learn_in_play: bool, accepted: bool, stored: int
+) -> None:
+    """After the walk-on the pose is trusted: a view unlike any stored, facing the away goal,
+    is stored on the next frame, labelled away, if the pose filter took the frame's features
+    (a kidnapped robot's would be refused) and learning in play is on."""
+    provider = walked_on(FieldEndProviderConfig(walk_on_s=1.0, learn_in_play=learn_in_play))
+    database = provider._recogniser.database  # type: ignore[union-attr]
+    size, away = len(database), database.count(AWAY)
+    assert play(provider, 1.0, view(AWAY, novel=True), tracked(0.0, accepted=True)) == size
+    after = play(provider, 1.1, view(AWAY), tracked(0.0, accepted=accepted))
+    assert after == size + stored and database.count(AWAY) == away + stored
+    assert provider.learned == stored
+
+
+def test_after_the_pose_jumps_views_are_stored_only_once_observations_agree_with_it() -> None:
+    """learn_after_agreeing = 2: after a jump, a new view is stored only once two away
+    observations agreed with the pose (facing away)."""
+    provider = walked_on(FieldEndProviderConfig(walk_on_s=1.0, learn_in_play=True))
+    database = provider._recogniser.database  # type: ignore[union-attr]
+    size = len(database)
+    here, there = tracked(0.0, accepted=True), tracked(0.0, accepted=True, x=1.0)
+    play(provider, 1.0, view(AWAY, novel=True), here)
+    # the pose moved 1 m in a frame (a relocalisation): the candidate is not stored, and the
+    # new view seen there is none (no observation has agreed with the pose since)
+    assert play(provider, 1.1, view(AWAY, novel=True), there) == size
+    t = 1.2
+    for stored in (0, 1):
+        for _ in range(100):  # views of the stored away goal until one is recognised
+            t += 0.1
+            seen = {HORIZON_FEATURES: view(AWAY), FIELD_FEATURES: (), PREVIOUS + SELF_POSE: there}
+            if provider.update(seen, t).observation == AWAY:
+                break
+        else:
+            pytest.fail("the stored away views never gave an away observation")
+        play(provider, t + 0.1, view(AWAY, novel=True), there)
+        assert play(provider, t + 0.2, view(AWAY), there) == size + stored
+        t += 0.2
 
 
 def test_views_stored_on_the_walk_on_tell_the_ends_apart_later() -> None:
@@ -148,6 +230,12 @@ def test_bad_provider_settings_are_refused() -> None:
         FieldEndProviderConfig(facing_tolerance_rad=2.0)
     with pytest.raises(TypeError, match="walk_on_needs_post"):
         FieldEndProviderConfig(walk_on_needs_post=1)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="learn_in_play"):
+        FieldEndProviderConfig(learn_in_play=1)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="learn_after_agreeing"):
+        FieldEndProviderConfig(learn_after_agreeing=-1)
+    with pytest.raises(ValueError, match="jump_m"):
+        FieldEndProviderConfig(jump_m=0.0)
 
 
 def test_facing_a_goal_area_means_the_optical_axis_meets_the_end_between_the_side_lines() -> None:
