@@ -73,11 +73,7 @@ class DiffDriveRig:
         ticks = self.encoders.measure(wheel_rotations_rad)
         self_id = world.body(robot.name)
         rays = functools.partial(world.ray_test, transparent_body=self_id)  # not on our own limbs
-        sonar = (
-            self.sonar.measure(rays, robot.pose, rng)
-            if self.sonar is not None
-            else None
-        )
+        sonar = self.sonar.measure(rays, robot.pose, rng) if self.sonar is not None else None
         laser = self.laser.measure(rays, robot.pose, rng)
         frame = SensorFrame(
             time_s=time_s,

@@ -160,16 +160,8 @@ class NaoRig:
         t1 = time.perf_counter()
         self_id = world.body(robot.name)
         rays = functools.partial(world.ray_test, transparent_body=self_id)  # not on our own limbs
-        sonar = (
-            self.sonar.measure(rays, robot.pose, rng)
-            if self.sonar is not None
-            else None
-        )
-        laser = (
-            self.laser.measure(rays, robot.pose, rng)
-            if self.laser is not None
-            else None
-        )
+        sonar = self.sonar.measure(rays, robot.pose, rng) if self.sonar is not None else None
+        laser = self.laser.measure(rays, robot.pose, rng) if self.laser is not None else None
         frame = SensorFrame(
             time_s=time_s,
             odometry_delta=self.odometry.measure(engine_delta),
