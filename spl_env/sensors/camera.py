@@ -156,7 +156,7 @@ class Camera:
             projection=self._projection,
             lighting=lighting.lighting,
         )
-        image = rgb.astype(np.float32) * lighting.exposure
+        image = np.multiply(rgb, np.float32(lighting.exposure), dtype=np.float32)
         if lighting.window_direction is not None:
             image = _window_glare(
                 image, forward, lighting.window_direction, lighting.window_strength, m
@@ -167,8 +167,9 @@ class Camera:
             image = np.asarray(cv2.blur(image, (k, 1)), dtype=np.float32)
         if self.config.noise_std > 0:
             noise = rng.standard_normal(size=image.shape, dtype=np.float32)
-            image += np.float32(self.config.noise_std) * noise
-        return np.clip(image, 0, 255).astype(np.uint8), labels
+            noise *= np.float32(self.config.noise_std)
+            image += noise
+        return np.clip(image, 0, 255, out=image).astype(np.uint8), labels
 
 
 def blur_length_px(yaw_rate_rps: float, exposure_time_s: float, fx: float) -> float:
