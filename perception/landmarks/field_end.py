@@ -137,7 +137,7 @@ class FieldEndRecogniser:
         self.database = ImageDatabase(vocabulary, config.retrieval)
         self._window: deque[int] = deque(maxlen=config.window)  # observations, 0 for none
         self._previous: IntArray | None = None  # last processed frame's counts
-        self._previous_label: int | None = None  # ... and its label while building
+        self._previous_label: int | None = None  # ... and its label (building, or a candidate)
         # the last observed frame, if it may be remembered: (words, x, label, counts)
         self._candidate: tuple[IntArray, NDArray[np.float64], int, IntArray] | None = None
 
@@ -156,6 +156,7 @@ class FieldEndRecogniser:
         Returns whether it was stored."""
         check_bool("FieldEndRecogniser.build", "facing_goal", facing_goal)
         check_bool("FieldEndRecogniser.build", "post_visible", post_visible)
+        self._candidate = None
         if not (facing_goal and post_visible):
             self._previous = self._previous_label = None
             return False
@@ -180,22 +181,26 @@ class FieldEndRecogniser:
         caller believes the camera faces; a frame so labelled that draws fewer than
         ``min_response`` hits, as a walk-on frame must to be stored, becomes the candidate
         that :meth:`remember` stores once the caller has confirmed the label (the next
-        observed frame replaces it)."""
+        observed frame replaces it). The query is expanded with the previous frame whatever
+        it faced; the candidate only with a previous frame of the same label, as in building."""
         check_bool("FieldEndRecogniser.observe", "facing_goal", facing_goal)
+        check_int("FieldEndRecogniser.observe", "label", label)
         if label:
             _check_label("FieldEndRecogniser.observe", label)
         hits: tuple[Hit, ...] = ()
         self._candidate = None
         if facing_goal:
+            previous_label = self._previous_label
             counts = self._expanded(words, same_label=None)
-            self._previous_label = None
+            own = self._previous  # this frame's counts alone (_expanded keeps them)
+            self._previous_label = label or None
             hits = self.database.query(words, x, self.rng, counts)
-            if label and len(hits) < self.config.min_response:
+            if label and own is not None and len(hits) < self.config.min_response:
                 self._candidate = (
                     np.asarray(words, dtype=np.int64),
                     np.asarray(x, dtype=np.float64),
                     label,
-                    counts,
+                    counts if previous_label == label else own,
                 )
         else:
             self._previous = self._previous_label = None

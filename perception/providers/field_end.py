@@ -69,20 +69,20 @@ class FieldEndProviderConfig:
     home one on seed 0), leaving the database small and unbalanced. So by default a view
     needs no post.
 
-    (b) Learning in play (``learn_in_play``; the seed fills the database on the walk-on
-    only): a view stored from one place rarely verifies against one from a few metres away,
-    so after the walk-on a frame facing a goal area that draws fewer than ``min_response``
-    hits (one the walk-on would have stored) is stored too, labelled by the end the pose's
-    camera faces, when the pose is trusted: ``learn_after_agreeing`` observations of the end
-    have agreed with the pose since it last jumped (moved over ``jump_m`` or turned over a
-    quarter turn in a frame: a relocalisation or a half turn; the walk-on's end counts as
-    trusted, its pose followed from the known start), and the pose filter took the frame's
-    field features (a robot kidnapped since the last frame would not be where its pose says).
-    Chosen on the kidnap benchmark's tuning seeds 0-4 (``benchmarks/kidnaps.py``, 50
-    kidnaps): 41 on the correct end with learning against 38 without (right / wrong
-    observations 453 / 40 against 272 / 33); 41 again with twice the database's room, and 39
-    with 4 agreeing observations needed instead of 2. ``jump_m`` is judgement: a few times a
-    frame's walk, far below a kidnap's or a half turn's move.
+    (b) Learning in play (``learn_in_play``; the seed fills the database on the walk-on only): a
+    view stored from one place rarely verifies against one from a few metres away, so after the
+    walk-on a frame facing a goal area that draws fewer than ``min_response`` hits (one the
+    walk-on would have stored) is stored too, labelled by the end the pose's camera faces, when
+    the pose is trusted: the last ``learn_after_agreeing`` observations of the end agreed with
+    the pose and came after it last jumped (moved over ``jump_m`` or turned over a quarter turn
+    in a frame: a relocalisation or a half turn; the walk-on's end counts as trusted, its pose
+    followed from the known start), and the pose filter took the frame's field features (a robot
+    kidnapped since the last frame would not be where its pose says). Chosen on the kidnap
+    benchmark's tuning seeds 0-4 (``benchmarks/kidnaps.py``, 50 kidnaps): 41 on the correct end
+    with learning against 38 without (right / wrong observations 453 / 40 against 272 / 33); 41
+    again with twice the database's room, and 39 with 4 agreeing observations needed instead of
+    2. ``jump_m`` is judgement: a few times a frame's walk, far below a kidnap's or a half
+    turn's move.
     """
 
     recogniser: FieldEndConfig = field(default_factory=FieldEndConfig)
@@ -97,7 +97,7 @@ class FieldEndProviderConfig:
     def __post_init__(self) -> None:
         check_bool("FieldEndProviderConfig", "walk_on_needs_post", self.walk_on_needs_post)
         check_bool("FieldEndProviderConfig", "learn_in_play", self.learn_in_play)
-        check_int("FieldEndProviderConfig", "learn_after_agreeing", self.learn_after_agreeing, 0)
+        check_int("FieldEndProviderConfig", "learn_after_agreeing", self.learn_after_agreeing, 1)
         check_positive("FieldEndProviderConfig", "jump_m", self.jump_m)
         check_positive("FieldEndProviderConfig", "walk_on_s", self.walk_on_s)
         check_positive(
@@ -135,7 +135,7 @@ class NaturalLandmarkFieldEnd(Provider):
         self._recogniser: FieldEndRecogniser | None = None
         self._start = np.zeros(3)
         self._start_s: float | None = None
-        self._agreeing = 0  # observations agreeing with the pose since it last jumped
+        self._agreeing = 0  # the last observations in a row agreeing with the pose, since it jumped
         self._last_pose: FloatArray | None = None  # the pose read on the previous frame
         self.learned = 0  # views stored after the walk-on since the reset
 
@@ -174,6 +174,7 @@ class NaturalLandmarkFieldEnd(Provider):
                 facing_goal=facing != 0,
                 post_visible=post_visible,
             )
+            self._last_pose = pose  # play's first frame looks for a jump from here
             return UNKNOWN
         if not self.config.learn_in_play:
             return self._recogniser.observe(words, x, facing_goal=facing != 0)

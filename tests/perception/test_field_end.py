@@ -158,22 +158,48 @@ def test_building_needs_a_goal_area_and_a_visible_post() -> None:
     assert len(r.database) == 0
 
 
+def stored_counts(r: FieldEndRecogniser) -> np.ndarray:
+    """The word counts (K,) of the last image the recogniser's database stored."""
+    return r.database._images[-1].counts
+
+
 def test_a_labelled_play_frame_with_few_hits_is_remembered_only_when_asked() -> None:
     r = with_two_goals(min_response=2)
     assert not r.remember()  # nothing observed yet: no candidate
+    r.observe(view(2), COLUMNS, facing_goal=False)  # no expansion with the walk-on's last
     r.observe(view(2), COLUMNS, facing_goal=True, label=AWAY)  # new words: no hit
     assert len(r.database) == 2  # observing alone stores nothing
     assert r.remember() and len(r.database) == 3 and r.database.count(AWAY) == 2
+    np.testing.assert_array_equal(stored_counts(r), np.isin(np.arange(100), view(2)))
     assert not r.remember()  # stored once
     # a frame without a label, or one not facing a goal, leaves no candidate
     r.observe(view(3), COLUMNS, facing_goal=True)
     assert not r.remember()
     r.observe(view(4), COLUMNS, facing_goal=False, label=HOME)
     assert not r.remember()
-    # the next observed frame replaces the candidate
+
+
+def test_the_next_observed_frame_replaces_the_candidate() -> None:
+    r = with_two_goals(min_response=2)
+    r.observe(view(5), COLUMNS, facing_goal=False)
     r.observe(view(5), COLUMNS, facing_goal=True, label=HOME)
-    r.observe(view(2), COLUMNS, facing_goal=False)
+    r.observe(view(6), COLUMNS, facing_goal=True, label=AWAY)
+    assert r.remember() and r.database.count(HOME) == 1 and r.database.count(AWAY) == 2
+    # ... stored with its own words only: the frame before faced the other goal
+    np.testing.assert_array_equal(stored_counts(r), np.isin(np.arange(100), view(6)))
+    r.observe(view(7), COLUMNS, facing_goal=True, label=AWAY)
+    r.observe(view(7), COLUMNS, facing_goal=False)
     assert not r.remember() and len(r.database) == 3
+
+
+def test_a_candidate_is_expanded_with_the_frame_before_of_its_label() -> None:
+    r = with_two_goals(min_response=3)
+    r.observe(view(5), COLUMNS, facing_goal=False)
+    r.observe(view(5), COLUMNS, facing_goal=True, label=AWAY)
+    r.observe(view(6), COLUMNS, facing_goal=True, label=AWAY)
+    assert r.remember()
+    expected = np.isin(np.arange(100), view(5)).astype(int) + np.isin(np.arange(100), view(6))
+    np.testing.assert_array_equal(stored_counts(r), expected)
 
 
 def test_a_play_frame_that_draws_min_response_hits_is_no_candidate() -> None:
@@ -182,13 +208,30 @@ def test_a_play_frame_that_draws_min_response_hits_is_no_candidate() -> None:
     assert not r.remember() and len(r.database) == 2
 
 
-def test_remembering_keeps_to_the_database_limits() -> None:
-    r = with_two_goals(max_per_goal=1)
-    r.observe(view(2), COLUMNS, facing_goal=True, label=HOME)  # HOME holds its one view
-    assert not r.remember() and r.database.count(HOME) == 1
-    r = with_two_goals(max_size=2)
+@pytest.mark.parametrize(
+    ("limits", "label", "stored"),
+    [
+        ({"max_per_goal": 1}, HOME, False),  # HOME holds its one view
+        ({"max_per_goal": 2}, HOME, True),
+        ({"max_size": 2}, AWAY, False),
+        ({"max_size": 3}, AWAY, True),
+    ],
+)
+def test_remembering_keeps_to_the_database_limits(
+    limits: dict[str, int], label: int, stored: bool
+) -> None:
+    r = with_two_goals(**limits)
+    r.observe(view(2), COLUMNS, facing_goal=False)
+    r.observe(view(2), COLUMNS, facing_goal=True, label=label)
+    assert r.remember() is stored
+    assert r.database.count(label) == 1 + stored
+
+
+def test_building_forgets_a_play_candidate() -> None:
+    r = with_two_goals(min_response=2)
     r.observe(view(2), COLUMNS, facing_goal=True, label=AWAY)
-    assert not r.remember() and len(r.database) == 2
+    r.build(view(3), COLUMNS, HOME, facing_goal=False, post_visible=True)
+    assert not r.remember()
 
 
 @pytest.mark.parametrize(
@@ -216,6 +259,8 @@ def test_bad_arguments_are_refused() -> None:
         r.observe(view(0), COLUMNS, facing_goal=1)  # type: ignore[arg-type]
     with pytest.raises(ValueError, match=r"observe\.label"):
         r.observe(view(0), COLUMNS, facing_goal=True, label=2)
+    with pytest.raises(TypeError, match=r"observe\.label"):
+        r.observe(view(0), COLUMNS, facing_goal=True, label=None)  # type: ignore[arg-type]
     with pytest.raises(TypeError, match="balance_votes"):
         FieldEndConfig(balance_votes=1)  # type: ignore[arg-type]
     with pytest.raises(TypeError, match="retrieval"):

@@ -78,10 +78,11 @@ def tracked(heading: float, *, accepted: bool, x: float = 0.0) -> TrackedPoseEst
 
 
 def walked_on(config: FieldEndProviderConfig) -> NaturalLandmarkFieldEnd:
-    """A provider after a walk-on (``config.walk_on_s`` <= 1 s) of five views of each end."""
+    """A provider after a walk-on (``config.walk_on_s`` <= 1 s) of five views of each end,
+    ending facing away at the centre spot."""
     provider = NaturalLandmarkFieldEnd(config, CONTEXT)
     provider.reset(Prior(pose=np.zeros(3), rng=np.random.default_rng(0)))
-    for end, heading in ((AWAY, 0.0), (HOME, math.pi)):
+    for end, heading in ((HOME, math.pi), (AWAY, 0.0)):
         for k in range(5):
             inputs = {
                 HORIZON_FEATURES: view(end, shift_px=2.0 * k),
@@ -143,6 +144,53 @@ def test_after_the_pose_jumps_views_are_stored_only_once_observations_agree_with
         play(provider, t + 0.1, view(AWAY, novel=True), there)
         assert play(provider, t + 0.2, view(AWAY), there) == size + stored
         t += 0.2
+
+
+def test_a_half_turn_of_the_pose_is_a_jump_too() -> None:
+    """At the centre spot a half turn moves the pose nowhere but turns it by pi: the view
+    seen before it is not stored."""
+    provider = walked_on(FieldEndProviderConfig(walk_on_s=1.0, learn_in_play=True))
+    size = len(provider._recogniser.database)  # type: ignore[union-attr]
+    play(provider, 1.0, view(AWAY, novel=True), tracked(0.0, accepted=True))
+    assert play(provider, 1.1, view(HOME), tracked(math.pi, accepted=True)) == size
+
+
+def test_a_jump_from_the_walk_ons_last_pose_is_seen() -> None:
+    """The walk-on ends facing home; the first play frame's pose faces away (turned through
+    the centre spot): no trust, so its new view is not stored."""
+    provider = walked_on(FieldEndProviderConfig(walk_on_s=1.0, learn_in_play=True))
+    provider.update(
+        {
+            HORIZON_FEATURES: view(HOME),
+            FIELD_FEATURES: (),
+            PREVIOUS + SELF_POSE: tracked(math.pi, accepted=True),
+        },
+        0.9,
+    )
+    size = len(provider._recogniser.database)  # type: ignore[union-attr]
+    play(provider, 1.0, view(AWAY, novel=True), tracked(0.0, accepted=True))
+    assert play(provider, 1.1, view(AWAY), tracked(0.0, accepted=True)) == size
+
+
+def test_a_new_episode_trusts_its_walk_on_again() -> None:
+    config = FieldEndProviderConfig(walk_on_s=1.0, learn_in_play=True)
+    provider = walked_on(config)
+    play(provider, 1.0, view(AWAY, novel=True), tracked(0.0, accepted=True))
+    play(provider, 1.1, view(AWAY), tracked(0.0, accepted=True, x=1.0))  # a jump: no trust
+    assert provider.learned == 0
+    provider.reset(Prior(pose=np.zeros(3), rng=np.random.default_rng(1)))
+    assert len(provider._recogniser.database) == 0  # type: ignore[union-attr]
+    for k in range(5):  # the walk-on, facing away, ending at x = 1 m
+        seen = {
+            HORIZON_FEATURES: view(AWAY, shift_px=2.0 * k),
+            FIELD_FEATURES: (),
+            PREVIOUS + SELF_POSE: tracked(0.0, accepted=True, x=1.0),
+        }
+        provider.update(seen, 0.1 * k)
+    size = len(provider._recogniser.database)  # type: ignore[union-attr]
+    here = tracked(0.0, accepted=True, x=1.0)
+    play(provider, 1.0, view(AWAY, novel=True), here)
+    assert play(provider, 1.1, view(AWAY), here) == size + 1 and provider.learned == 1
 
 
 def test_views_stored_on_the_walk_on_tell_the_ends_apart_later() -> None:
@@ -233,7 +281,7 @@ def test_bad_provider_settings_are_refused() -> None:
     with pytest.raises(TypeError, match="learn_in_play"):
         FieldEndProviderConfig(learn_in_play=1)  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="learn_after_agreeing"):
-        FieldEndProviderConfig(learn_after_agreeing=-1)
+        FieldEndProviderConfig(learn_after_agreeing=0)
     with pytest.raises(ValueError, match="jump_m"):
         FieldEndProviderConfig(jump_m=0.0)
 
