@@ -80,9 +80,11 @@ class FieldEndProviderConfig:
     kidnapped since the last frame would not be where its pose says). Chosen on the kidnap
     benchmark's tuning seeds 0-4 (``benchmarks/kidnaps.py``, 50 kidnaps): 41 on the correct end
     with learning against 38 without (right / wrong observations 453 / 40 against 272 / 33); 41
-    again with twice the database's room, and 39 with 4 agreeing observations needed instead of
-    2. ``jump_m`` is judgement: a few times a frame's walk, far below a kidnap's or a half
-    turn's move.
+    again with twice the database's room, 40 with a 50 degree facing tolerance, and 39 with 4
+    agreeing observations needed instead of 2. After a review fixed how trust carries from the
+    walk-on into play and how a candidate is expanded: 39 against 38 (446 / 43 observations;
+    ``--out benchmarks/results/kidnaps_tuning``). ``jump_m`` is judgement: a few times a frame's
+    walk, far below a kidnap's or a half turn's move.
     """
 
     recogniser: FieldEndConfig = field(default_factory=FieldEndConfig)
