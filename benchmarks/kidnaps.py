@@ -206,23 +206,7 @@ def main() -> None:
             result = episode(variant, args.seed + k, args)
             print(name, args.seed + k, json.dumps(result), flush=True)
             kidnaps += result
-        correct = [r for r in kidnaps if r["correct_end"]]
-        observations = {
-            verdict: sum(r["end_observations"][verdict] for r in kidnaps)
-            for verdict in ("right", "wrong")
-        }
-        rows[name] = {
-            "end_observations": observations,
-            "kidnaps": len(kidnaps),
-            "correct_end": len(correct),
-            "mean_error_correct_end_m": float(np.mean([r["error_m"] for r in correct]))
-            if correct
-            else math.nan,
-            "median_error_m": float(np.median([r["error_m"] for r in kidnaps])),
-            "silent_intervals": sum(1 for r in kidnaps if not any(r["end_observations"].values())),
-            "stored": [kidnaps[k * args.kidnaps]["database"] for k in range(args.episodes)],
-            "all": kidnaps,
-        }
+        rows[name] = summary(kidnaps, args.kidnaps)
     report = {
         "seeds": [args.seed, args.seed + args.episodes - 1],
         "walk_on_s": args.walk_on,
@@ -231,11 +215,38 @@ def main() -> None:
         "variants": rows,
         "seconds": time.perf_counter() - t0,
     }
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "kidnaps.json").write_text(json.dumps(report, indent=1))
+    print(write_report(report, args.out))
+
+
+def summary(kidnaps: list[dict[str, Any]], per_episode: int) -> dict[str, Any]:
+    """One variant's row: its ``kidnaps`` (each episode's ``per_episode`` in turn) counted."""
+    correct = [r for r in kidnaps if r["correct_end"]]
+    observations = {
+        verdict: sum(r["end_observations"][verdict] for r in kidnaps)
+        for verdict in ("right", "wrong")
+    }
+    return {
+        "end_observations": observations,
+        "kidnaps": len(kidnaps),
+        "correct_end": len(correct),
+        "mean_error_correct_end_m": float(np.mean([r["error_m"] for r in correct]))
+        if correct
+        else math.nan,
+        "median_error_m": float(np.median([r["error_m"] for r in kidnaps])),
+        "silent_intervals": sum(1 for r in kidnaps if not any(r["end_observations"].values())),
+        "stored": [kidnaps[k]["database"] for k in range(0, len(kidnaps), per_episode)],
+        "all": kidnaps,
+    }
+
+
+def write_report(report: dict[str, Any], out: Path) -> str:
+    """Write ``report`` to ``out`` as ``kidnaps.json`` and ``kidnaps.md``; the table."""
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "kidnaps.json").write_text(json.dumps(report, indent=1))
+    first, last = report["seeds"]
     lines = [
-        f"Kidnaps after a {args.walk_on:.0f} s walk-on, one every {args.interval:.0f} s, "
-        f"seeds {args.seed}-{args.seed + args.episodes - 1} (seed 004 Table 4)",
+        f"Kidnaps after a {report['walk_on_s']:.0f} s walk-on, one every "
+        f"{report['interval_s']:.0f} s, seeds {first}-{last} (seed 004 Table 4)",
         "",
         "| localisation | correct end | mean error on the correct end (m) | median error (m) "
         "| field-end observations right / wrong | intervals without one "
@@ -248,13 +259,13 @@ def main() -> None:
             f"{r['silent_intervals']} | "
             + ", ".join(f"{d['away']}+{d['home']}" if d else "-" for d in r["stored"])
             + " |"
-            for name, r in rows.items()
+            for name, r in report["variants"].items()
         ),
         "",
         f"Run time {report['seconds']:.0f} s.",
     ]
-    (args.out / "kidnaps.md").write_text("\n".join(lines) + "\n")
-    print("\n".join(lines))
+    (out / "kidnaps.md").write_text("\n".join(lines) + "\n")
+    return "\n".join(lines)
 
 
 if __name__ == "__main__":

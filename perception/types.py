@@ -355,6 +355,10 @@ class TrackedPoseEstimate(SlamEstimate):
     """A :class:`SlamEstimate` of a filter that knows whether it is following the robot:
     ``accepted`` is True when this frame brought a pose observation that the filter's gate
     took (the frame's features agree with the pose it predicted), False when it brought none
-    or one the gate refused. The field-feature pose filter's estimate."""
+    or one the gate refused; ``restarted`` is True when the filter restarted this frame from
+    something other than its own prediction (a relocalisation from one frame's features, or a
+    half turn through the centre spot), so that its pose may have jumped. The field-feature
+    pose filter's estimate."""
 
     accepted: bool = False
+    restarted: bool = False

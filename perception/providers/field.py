@@ -216,6 +216,7 @@ class FieldFeaturePose(Provider):
 
     def update(self, inputs: Mapping[str, Any], time_s: float) -> TrackedPoseEstimate:
         pose_filter = self.filter
+        restarts = self.relocalisations + self.half_turns
         pose_filter.predict(inputs[ODOMETRY].delta)
         self._weigh_the_field_end(inputs[FIELD_END], inputs["camera_state"].head_yaw)
         features = inputs[FIELD_FEATURES]
@@ -235,6 +236,7 @@ class FieldFeaturePose(Provider):
             landmarks=np.zeros((0, 2)),
             landmark_covs=np.zeros((0, 2, 2)),
             accepted=accepted,
+            restarted=self.relocalisations + self.half_turns > restarts,
         )
 
     def _weigh_the_field_end(self, belief: FieldEndBelief, head_yaw: float) -> None:

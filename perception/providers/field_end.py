@@ -49,7 +49,7 @@ from perception.representations import (
     SELF_POSE,
     Prior,
 )
-from perception.types import SlamEstimate, TrackedPoseEstimate
+from perception.types import TrackedPoseEstimate
 from perception.validation import check_bool, check_int, check_positive
 
 UNKNOWN = FieldEndBelief(
@@ -74,17 +74,19 @@ class FieldEndProviderConfig:
     walk-on a frame facing a goal area that draws fewer than ``min_response`` hits (one the
     walk-on would have stored) is stored too, labelled by the end the pose's camera faces, when
     the pose is trusted: the last ``learn_after_agreeing`` observations of the end agreed with
-    the pose and came after it last jumped (moved over ``jump_m`` or turned over a quarter turn
-    in a frame: a relocalisation or a half turn; the walk-on's end counts as trusted, its pose
-    followed from the known start), and the pose filter took the frame's field features (a robot
-    kidnapped since the last frame would not be where its pose says). Chosen on the kidnap
+    the pose and came after the pose filter last restarted (a relocalisation or a half turn:
+    ``TrackedPoseEstimate.restarted``; the walk-on's end counts as trusted, its pose followed
+    from the known start, unless the filter restarted during it), and the pose filter took the
+    frame's field features (a robot kidnapped since the last frame would not be where its pose
+    says). Chosen on the kidnap
     benchmark's tuning seeds 0-4 (``benchmarks/kidnaps.py``, 50 kidnaps): 41 on the correct end
     with learning against 38 without (right / wrong observations 453 / 40 against 272 / 33); 41
     again with twice the database's room, 40 with a 50 degree facing tolerance, and 39 with 4
     agreeing observations needed instead of 2. After a review fixed how trust carries from the
     walk-on into play and how a candidate is expanded: 39 against 38 (446 / 43 observations;
-    ``--out benchmarks/results/kidnaps_tuning``). ``jump_m`` is judgement: a few times a frame's
-    walk, far below a kidnap's or a half turn's move.
+    ``--out benchmarks/results/kidnaps_tuning``). Trust first ended when the pose moved over
+    0.5 m or turned over a quarter turn in a frame; ending it on the filter's restarts gave
+    the same 39, kidnap for kidnap.
     """
 
     recogniser: FieldEndConfig = field(default_factory=FieldEndConfig)
@@ -94,13 +96,11 @@ class FieldEndProviderConfig:
     walk_on_needs_post: bool = False  # the seed's: True (a)
     learn_in_play: bool = True  # the seed's: False (the walk-on only) (b)
     learn_after_agreeing: int = 2  # (b)
-    jump_m: float = 0.5  # (b)
 
     def __post_init__(self) -> None:
         check_bool("FieldEndProviderConfig", "walk_on_needs_post", self.walk_on_needs_post)
         check_bool("FieldEndProviderConfig", "learn_in_play", self.learn_in_play)
         check_int("FieldEndProviderConfig", "learn_after_agreeing", self.learn_after_agreeing, 1)
-        check_positive("FieldEndProviderConfig", "jump_m", self.jump_m)
         check_positive("FieldEndProviderConfig", "walk_on_s", self.walk_on_s)
         check_positive(
             "FieldEndProviderConfig", "goal_margin_rad", self.goal_margin_rad, allow_zero=True
@@ -137,8 +137,8 @@ class NaturalLandmarkFieldEnd(Provider):
         self._recogniser: FieldEndRecogniser | None = None
         self._start = np.zeros(3)
         self._start_s: float | None = None
-        self._agreeing = 0  # the last observations in a row agreeing with the pose, since it jumped
-        self._last_pose: FloatArray | None = None  # the pose read on the previous frame
+        # the last observations in a row agreeing with the pose, since the pose filter restarted
+        self._agreeing = 0
         self.learned = 0  # views stored after the walk-on since the reset
 
     def reset(self, prior: Prior) -> None:
@@ -147,7 +147,6 @@ class NaturalLandmarkFieldEnd(Provider):
         self._start_s = None
         # the walk-on's pose is followed from the known start: trusted as it ends
         self._agreeing = self.config.learn_after_agreeing
-        self._last_pose = None
         self.learned = 0
 
     def update(self, inputs: Mapping[str, Any], time_s: float) -> FieldEndBelief:
@@ -158,6 +157,8 @@ class NaturalLandmarkFieldEnd(Provider):
         seen: HorizonFeatures = inputs[HORIZON_FEATURES]
         previous = inputs[PREVIOUS + SELF_POSE]
         pose = self._start if previous is None else previous.pose
+        if isinstance(previous, TrackedPoseEstimate) and previous.restarted:
+            self._agreeing = 0  # the pose may have jumped: trust it again once views agree
         facing = self._facing(pose, pose[2] + seen.head_yaw)
         words, x = np.zeros(0, dtype=np.int64), np.zeros(0)  # not facing a goal area: unread
         if facing:
@@ -176,35 +177,19 @@ class NaturalLandmarkFieldEnd(Provider):
                 facing_goal=facing != 0,
                 post_visible=post_visible,
             )
-            self._last_pose = pose  # play's first frame looks for a jump from here
             return UNKNOWN
         if not self.config.learn_in_play:
             return self._recogniser.observe(words, x, facing_goal=facing != 0)
-        self._follow(self._recogniser, pose, previous)
         trusted = self._agreeing >= self.config.learn_after_agreeing
+        # the filter took the previous frame's features: the robot was where it believed
+        if trusted and isinstance(previous, TrackedPoseEstimate) and previous.accepted:
+            self.learned += self._recogniser.remember()
         belief = self._recogniser.observe(
             words, x, facing_goal=facing != 0, label=facing if trusted else 0
         )
         if belief.observation:
             self._agreeing = self._agreeing + 1 if belief.observation == facing else 0
         return belief
-
-    def _follow(
-        self, recogniser: FieldEndRecogniser, pose: FloatArray, previous: SlamEstimate | None
-    ) -> None:
-        """Learning in play: forget the agreeing observations when the pose (3,) jumped since
-        the frame before (moved over ``jump_m``, or turned over a quarter turn: a
-        relocalisation or a half turn); then store the previous frame's candidate view if the
-        pose filter took that frame's features (the robot was where it believed it was)."""
-        last, self._last_pose = self._last_pose, pose
-        if last is not None and (
-            math.hypot(*(pose[:2] - last[:2])) > self.config.jump_m
-            or abs(math.remainder(pose[2] - last[2], math.tau)) > math.pi / 2
-        ):
-            self._agreeing = 0
-        accepted = isinstance(previous, TrackedPoseEstimate) and previous.accepted
-        if accepted and self._agreeing >= self.config.learn_after_agreeing:
-            self.learned += recogniser.remember()
 
     def _on_goal(self, seen: HorizonFeatures, pose: FloatArray, end: int) -> NDArray[np.bool_]:
         """(N,) bool: the features between the bearings of the ``end`` goal's posts seen from

@@ -64,9 +64,11 @@ def estimate(heading: float) -> SlamEstimate:
     )
 
 
-def tracked(heading: float, *, accepted: bool, x: float = 0.0) -> TrackedPoseEstimate:
+def tracked(
+    heading: float, *, accepted: bool, x: float = 0.0, restarted: bool = False
+) -> TrackedPoseEstimate:
     """The field-feature pose filter's estimate at (x, 0, heading); ``accepted``: it took the
-    frame's features."""
+    frame's features; ``restarted``: it relocalised or turned through the centre spot."""
     return TrackedPoseEstimate(
         pose=np.array([x, 0.0, heading]),
         pose_cov=np.eye(3) * 0.01,
@@ -74,6 +76,7 @@ def tracked(heading: float, *, accepted: bool, x: float = 0.0) -> TrackedPoseEst
         landmarks=np.zeros((0, 2)),
         landmark_covs=np.zeros((0, 2, 2)),
         accepted=accepted,
+        restarted=restarted,
     )
 
 
@@ -121,17 +124,19 @@ def test_a_new_play_view_is_stored_once_the_pose_filter_took_its_frame(
     assert provider.learned == stored
 
 
-def test_after_the_pose_jumps_views_are_stored_only_once_observations_agree_with_it() -> None:
-    """learn_after_agreeing = 2: after a jump, a new view is stored only once two away
-    observations agreed with the pose (facing away)."""
+def test_after_the_pose_filter_restarts_views_are_stored_only_once_observations_agree() -> None:
+    """learn_after_agreeing = 2: after the filter relocalised, a new view is stored only once
+    two away observations agreed with the pose (facing away)."""
     provider = walked_on(FieldEndProviderConfig(walk_on_s=1.0, learn_in_play=True))
     database = provider._recogniser.database  # type: ignore[union-attr]
     size = len(database)
-    here, there = tracked(0.0, accepted=True), tracked(0.0, accepted=True, x=1.0)
+    here = tracked(0.0, accepted=True)
+    relocalised = tracked(0.0, accepted=True, x=1.0, restarted=True)
+    there = tracked(0.0, accepted=True, x=1.0)
     play(provider, 1.0, view(AWAY, novel=True), here)
-    # the pose moved 1 m in a frame (a relocalisation): the candidate is not stored, and the
-    # new view seen there is none (no observation has agreed with the pose since)
-    assert play(provider, 1.1, view(AWAY, novel=True), there) == size
+    # the filter relocalised 1 m away: the candidate is not stored, and the new view seen there
+    # is none (no observation has agreed with the pose since)
+    assert play(provider, 1.1, view(AWAY, novel=True), relocalised) == size
     t = 1.2
     for stored in (0, 1):
         for _ in range(100):  # views of the stored away goal until one is recognised
@@ -146,24 +151,25 @@ def test_after_the_pose_jumps_views_are_stored_only_once_observations_agree_with
         t += 0.2
 
 
-def test_a_half_turn_of_the_pose_is_a_jump_too() -> None:
-    """At the centre spot a half turn moves the pose nowhere but turns it by pi: the view
-    seen before it is not stored."""
+def test_a_half_turn_of_the_pose_filter_ends_the_trust_too() -> None:
+    """A half turn through the centre spot is a restart: the view seen before it is not
+    stored, though the filter took the frame's features."""
     provider = walked_on(FieldEndProviderConfig(walk_on_s=1.0, learn_in_play=True))
     size = len(provider._recogniser.database)  # type: ignore[union-attr]
     play(provider, 1.0, view(AWAY, novel=True), tracked(0.0, accepted=True))
-    assert play(provider, 1.1, view(HOME), tracked(math.pi, accepted=True)) == size
+    turned = tracked(math.pi, accepted=True, restarted=True)
+    assert play(provider, 1.1, view(HOME), turned) == size
 
 
-def test_a_jump_from_the_walk_ons_last_pose_is_seen() -> None:
-    """The walk-on ends facing home; the first play frame's pose faces away (turned through
-    the centre spot): no trust, so its new view is not stored."""
+def test_a_restart_during_the_walk_on_ends_the_walk_ons_trust() -> None:
+    """The filter restarts on the walk-on's last frame: play's new views are not stored until
+    observations agree with the pose again."""
     provider = walked_on(FieldEndProviderConfig(walk_on_s=1.0, learn_in_play=True))
     provider.update(
         {
-            HORIZON_FEATURES: view(HOME),
+            HORIZON_FEATURES: view(AWAY),
             FIELD_FEATURES: (),
-            PREVIOUS + SELF_POSE: tracked(math.pi, accepted=True),
+            PREVIOUS + SELF_POSE: tracked(0.0, accepted=True, restarted=True),
         },
         0.9,
     )
@@ -172,11 +178,21 @@ def test_a_jump_from_the_walk_ons_last_pose_is_seen() -> None:
     assert play(provider, 1.1, view(AWAY), tracked(0.0, accepted=True)) == size
 
 
+def test_a_pose_that_moves_without_a_restart_keeps_the_trust() -> None:
+    """Trust ends with the filter's restarts, not with how far its pose moves: a pose 1 m
+    from the last (a fast walk, a large correction) still stores the new view."""
+    provider = walked_on(FieldEndProviderConfig(walk_on_s=1.0, learn_in_play=True))
+    size = len(provider._recogniser.database)  # type: ignore[union-attr]
+    play(provider, 1.0, view(AWAY, novel=True), tracked(0.0, accepted=True))
+    assert play(provider, 1.1, view(AWAY), tracked(0.0, accepted=True, x=1.0)) == size + 1
+
+
 def test_a_new_episode_trusts_its_walk_on_again() -> None:
     config = FieldEndProviderConfig(walk_on_s=1.0, learn_in_play=True)
     provider = walked_on(config)
     play(provider, 1.0, view(AWAY, novel=True), tracked(0.0, accepted=True))
-    play(provider, 1.1, view(AWAY), tracked(0.0, accepted=True, x=1.0))  # a jump: no trust
+    relocalised = tracked(0.0, accepted=True, x=1.0, restarted=True)
+    play(provider, 1.1, view(AWAY), relocalised)  # a restart: no trust
     assert provider.learned == 0
     provider.reset(Prior(pose=np.zeros(3), rng=np.random.default_rng(1)))
     assert len(provider._recogniser.database) == 0  # type: ignore[union-attr]
@@ -282,8 +298,6 @@ def test_bad_provider_settings_are_refused() -> None:
         FieldEndProviderConfig(learn_in_play=1)  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="learn_after_agreeing"):
         FieldEndProviderConfig(learn_after_agreeing=0)
-    with pytest.raises(ValueError, match="jump_m"):
-        FieldEndProviderConfig(jump_m=0.0)
 
 
 def test_facing_a_goal_area_means_the_optical_axis_meets_the_end_between_the_side_lines() -> None:

@@ -131,16 +131,19 @@ def test_field_end_observations_turn_a_mirrored_filter_round() -> None:
     still = OdometryStep(delta=np.zeros(3), walk_delta=np.zeros(3))
     inputs = {ODOMETRY: still, FIELD_FEATURES: (), "camera_state": STATE}
     for k, observation in enumerate((AWAY, 0, AWAY)):  # two disagreeing views, one frame none
-        provider.update({**inputs, FIELD_END: belief(observation)}, 0.1 * k)
+        estimate = provider.update({**inputs, FIELD_END: belief(observation)}, 0.1 * k)
         np.testing.assert_allclose(provider.filter.pose, [1.0, 0.5, math.pi - 0.2])
-    provider.update({**inputs, FIELD_END: belief(AWAY)}, 0.3)
+        assert not estimate.restarted
+    estimate = provider.update({**inputs, FIELD_END: belief(AWAY)}, 0.3)
     np.testing.assert_allclose(provider.filter.pose, [-1.0, -0.5, -0.2], atol=1e-12)
+    assert estimate.restarted  # the turn is a restart: the field-end provider's trust ends
     # standing still adds no odometry noise: the covariance is the half turn of the old one
     flip = np.diag([-1.0, -1.0, 1.0])
     np.testing.assert_allclose(provider.filter.cov, flip @ cov @ flip, atol=1e-15)
     # now the views agree with the heading: nothing more happens
     for k in range(5):
-        provider.update({**inputs, FIELD_END: belief(AWAY)}, 0.4 + 0.1 * k)
+        estimate = provider.update({**inputs, FIELD_END: belief(AWAY)}, 0.4 + 0.1 * k)
+        assert not estimate.restarted
     np.testing.assert_allclose(provider.filter.pose, [-1.0, -0.5, -0.2], atol=1e-12)
     assert provider.half_turns == 1
 
@@ -199,9 +202,12 @@ def test_a_relocalisation_restarts_on_the_twin_nearer_the_filter(
     still = OdometryStep(delta=np.zeros(3), walk_delta=np.zeros(3))
     post = FieldFeature("goal_post", np.array([[2.0, 0.1]]), 1e-4 * np.eye(2)[None])
     inputs = {ODOMETRY: still, FIELD_FEATURES: (post,), "camera_state": STATE}
-    for k in range(8):
-        provider.update({**inputs, FIELD_END: belief(AWAY if k < 2 else 0)}, 0.1 * k)
+    restarted = [
+        provider.update({**inputs, FIELD_END: belief(AWAY if k < 2 else 0)}, 0.1 * k).restarted
+        for k in range(8)
+    ]
     assert provider.relocalisations == 1 and provider.half_turns == 0
+    assert restarted == [False] * 7 + [True]  # the estimate says so on the restart's frame
     twin = np.array([1.5, -0.3, wrap_angle(0.1 + math.pi)])
     np.testing.assert_allclose(provider.filter.pose, twin, atol=1e-12)
     flip = np.diag([-1.0, -1.0, 1.0])

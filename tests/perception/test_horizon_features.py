@@ -83,5 +83,3 @@ def test_the_reported_odometry_passes_the_walk_through() -> None:
     np.testing.assert_array_equal(step.delta, delta)
     np.testing.assert_array_equal(step.walk_delta, delta)
     assert not step.visual and step.collision == 0
-
-
