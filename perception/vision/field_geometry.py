@@ -23,9 +23,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import cached_property, lru_cache
+from functools import cached_property
 from typing import Literal
 
+import cv2
 import numpy as np
 from numpy.typing import NDArray
 
@@ -106,20 +107,13 @@ class CircleFound:
 
 
 def _tls(points: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Centroid (2,) and unit direction (2,) of the total-least-squares line through (K, 2)."""
+    """Centroid (2,) and unit direction (2,) of the total-least-squares line through (K, 2):
+    the principal axis of their scatter, at half the angle of ``(sxx - syy, 2 sxy)`` (in
+    [-pi/2, pi/2], so x >= 0; (1, 0) when the points coincide)."""
     centre = points.sum(axis=0) / len(points)  # the mean, without its overhead
-    _, _, vt = np.linalg.svd(points - centre, full_matrices=False)
-    return centre, np.asarray(vt[0], dtype=np.float64)
-
-
-@lru_cache(maxsize=8)
-def _hough_trig(theta_step_rad: float) -> FloatArray:
-    """(2, T) cosines and sines of the Hough angles ``0, theta_step_rad, ...`` below pi
-    (read-only: one table per step, shared by every call)."""
-    thetas = np.arange(0.0, math.pi, theta_step_rad)
-    trig = np.vstack([np.cos(thetas), np.sin(thetas)])
-    trig.flags.writeable = False
-    return trig
+    (sxx, sxy), (_, syy) = (points - centre).T @ (points - centre)
+    angle = 0.5 * math.atan2(2.0 * sxy, sxx - syy)
+    return centre, np.array([math.cos(angle), math.sin(angle)])
 
 
 def image_lines(
@@ -137,9 +131,10 @@ def image_lines(
     """Collinear groups among the image points ``points`` (N, 2) px.
 
     Repeatedly: take the peak of the ``(theta, rho)`` accumulator (steps ``theta_step_rad``,
-    ``rho_step_px``) of the votes of every remaining point, refit the points within
-    ``rho_step_px`` of it by total least squares and take those within ``tol_px`` of the
-    refit; they leave the pool (taking their votes back), are refitted together, and are split
+    ``rho_step_px``) of the votes of every remaining point (OpenCV's ``HoughLinesPointSet`` on
+    the points in float32; of equal peaks the first in theta-major order), refit the points
+    within ``rho_step_px`` of it by total least squares and take those within ``tol_px`` of the
+    refit; they leave the pool (and the next accumulator), are refitted together, and are split
     where consecutive points along the line lie more than ``split_gap_px`` apart or, given
     their ground points ``ground`` (N, 2) m, more than ``split_gap_m`` apart on the ground. The
     pieces of ``min_points`` or more points keep the common line (a far line thinner than a
@@ -150,38 +145,38 @@ def image_lines(
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
     if len(pts) < min_points:  # no peak can have enough votes
         return []
-    trig = _hough_trig(theta_step_rad)  # (2, T)
-    rho_max = float(np.abs(pts).sum(axis=1).max()) + rho_step_px
-    n_rho = math.ceil(2 * rho_max / rho_step_px) + 1
-    # each point's accumulator cells (N, T); a point leaving the pool takes its votes back
-    cells = pts @ trig
-    cells += rho_max
-    cells /= rho_step_px
-    np.rint(cells, out=cells)
-    cells += n_rho * np.arange(trig.shape[1], dtype=np.float64)  # exact: small whole numbers
-    bins = cells.astype(np.intp)
-    votes = np.bincount(bins.ravel(), minlength=n_rho * trig.shape[1])
+    rho_max = float(np.abs(pts).sum(axis=1).max()) + rho_step_px  # no |rho| can reach it
+    pts32 = pts.astype(np.float32).reshape(-1, 1, 2)  # OpenCV's point set
     remaining = np.arange(len(pts))
     out: list[ImageLine] = []
     for _ in range(max_peaks):
         if len(remaining) < min_points:
             break
-        p = pts[remaining]
-        peak = int(np.argmax(votes))
-        if votes[peak] < min_points:
+        # the accumulator's peak, (votes, rho, theta); lines need votes > the threshold
+        peak = cv2.HoughLinesPointSet(
+            pts32[remaining],
+            1,
+            min_points - 1,
+            -rho_max,
+            rho_max,
+            rho_step_px,
+            0.0,
+            math.pi - 1e-9,  # angles 0, theta_step_rad, ... below pi
+            theta_step_rad,
+        )
+        if peak is None or len(peak) == 0:
             break
-        t, r = divmod(peak, n_rho)
-        normal, rho = trig[:, t], r * rho_step_px - rho_max
-        near = np.abs(p @ normal - rho) <= max(rho_step_px, tol_px)
+        _, rho, theta = peak[0]
+        p = pts[remaining]
+        hough_normal = np.array([math.cos(theta), math.sin(theta)])
+        near = np.abs(p @ hough_normal - rho) <= max(rho_step_px, tol_px)
         centre, direction = _tls(p[near])
         normal = np.array([-direction[1], direction[0]])
         near = np.abs((p - centre) @ normal) <= tol_px
         if not near.any():  # cannot happen for a peak; guards the loop's progress
-            near = np.abs(p @ trig[:, t] - rho) <= rho_step_px
+            near = np.abs(p @ hough_normal - rho) <= rho_step_px
         chosen = remaining[near]
         remaining = remaining[~near]
-        if len(remaining) >= min_points:  # the rest vote again: take these votes back
-            np.subtract.at(votes, bins[chosen].ravel(), 1)
         along = (pts[chosen] - centre) @ direction
         order = np.argsort(along)
         chosen, along = chosen[order], along[order]
