@@ -9,8 +9,8 @@ processes running together share the same load, so their ratio is what the chang
 earlier checkout runs its own copy of the script with ``PYTHONPATH`` at its root (so that it
 imports its own packages, ahead of this checkout's editable install); this checkout runs the
 script as it is. Both get ``OMP_NUM_THREADS=1`` and write their JSON to a temporary ``--out``
-(the script must take one); ``--out`` here receives ``{"script", "args", "before", "after"}``
-with each side's commit and JSON.
+(the script must take one, for a file or a directory); ``--out`` here receives
+``{"script", "args", "before", "after"}`` with each side's commit and JSON.
 """
 
 from __future__ import annotations
@@ -50,7 +50,7 @@ def side_by_side(baseline: Path, script: str, args: list[str]) -> dict[str, Any]
         raise ValueError(f"{ROOT / script} does not exist")
     sides = {"before": baseline.resolve(), "after": ROOT}
     with tempfile.TemporaryDirectory() as scratch:
-        outs = {side: Path(scratch) / f"{side}.json" for side in sides}
+        outs = {side: Path(scratch) / side / "result.json" for side in sides}
         running = {}
         for side, root in sides.items():
             env = {**os.environ, "OMP_NUM_THREADS": "1"}
@@ -69,10 +69,21 @@ def side_by_side(baseline: Path, script: str, args: list[str]) -> dict[str, Any]
             "script": script,
             "args": args,
             **{
-                side: {"commit": commit_of(root), "result": json.loads(outs[side].read_text())}
+                side: {"commit": commit_of(root), "result": _read_result(outs[side])}
                 for side, root in sides.items()
             },
         }
+
+
+def _read_result(out: Path) -> Any:
+    """The JSON a script wrote to ``out``: the file, or the one ``.json`` file in it when the
+    script took ``--out`` for a directory (as ``no_poles_patrols.py`` does)."""
+    if out.is_dir():
+        written = sorted(out.glob("*.json"))
+        if len(written) != 1:
+            raise RuntimeError(f"expected one JSON file in {out}, found {len(written)}")
+        out = written[0]
+    return json.loads(out.read_text())
 
 
 def main() -> None:
