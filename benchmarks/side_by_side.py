@@ -11,11 +11,18 @@ imports its own packages, ahead of this checkout's editable install); this check
 script as it is. Both get ``OMP_NUM_THREADS=1`` and write their JSON to a temporary ``--out``
 (the script must take one, for a file or a directory); ``--out`` here receives
 ``{"script", "args", "before", "after"}`` with each side's commit and JSON.
+
+``--pin`` pins each side to a core of its own (``os.sched_setaffinity``) and runs the pair
+twice, the cores swapped the second time: left to the scheduler, a process that briefly uses
+more threads (OpenCV's) or lands on the slower core moves the ratio by ten per cent or more.
+``--out`` then receives ``{"script", "args", "pinned": [round, round]}``, each round as above
+plus ``"cores"``.
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import os
 import subprocess
@@ -41,9 +48,12 @@ def commit_of(checkout: Path) -> str:
     return head.stdout.strip() + ("+dirty" if dirty else "")
 
 
-def side_by_side(baseline: Path, script: str, args: list[str]) -> dict[str, Any]:
+def side_by_side(
+    baseline: Path, script: str, args: list[str], cores: tuple[int, int] | None = None
+) -> dict[str, Any]:
     """Run ``script`` (a path relative to a checkout's root) with ``args`` in ``baseline`` and
-    in this checkout at once; return both sides' commits and JSON results."""
+    in this checkout at once (pinned to ``cores``, before's and after's, if given); return
+    both sides' commits and JSON results."""
     if not (baseline / script).is_file():
         raise ValueError(f"{baseline / script} does not exist: --baseline must be a checkout")
     if not (ROOT / script).is_file():
@@ -52,13 +62,19 @@ def side_by_side(baseline: Path, script: str, args: list[str]) -> dict[str, Any]
     with tempfile.TemporaryDirectory() as scratch:
         outs = {side: Path(scratch) / side / "result.json" for side in sides}
         running = {}
-        for side, root in sides.items():
+        for k, (side, root) in enumerate(sides.items()):
             env = {**os.environ, "OMP_NUM_THREADS": "1"}
             if side == "before":
                 env["PYTHONPATH"] = str(root)
             command = [sys.executable, script, *args, "--out", str(outs[side])]
+            core = None if cores is None else cores[k]
             running[side] = subprocess.Popen(
-                command, cwd=root, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
+                command,
+                cwd=root,
+                env=env,
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.PIPE,
+                preexec_fn=None if core is None else functools.partial(_pin, core),
             )
         for side, process in running.items():
             _, stderr = process.communicate()
@@ -73,6 +89,11 @@ def side_by_side(baseline: Path, script: str, args: list[str]) -> dict[str, Any]
                 for side, root in sides.items()
             },
         }
+
+
+def _pin(core: int) -> None:
+    """Run this (child) process on ``core`` alone."""
+    os.sched_setaffinity(0, {core})
 
 
 def _read_result(out: Path) -> Any:
@@ -92,10 +113,23 @@ def main() -> None:
     )
     parser.add_argument("--baseline", type=Path, required=True, help="an earlier checkout")
     parser.add_argument("--out", type=Path, required=True)
+    parser.add_argument(
+        "--pin", action="store_true", help="one core each, run twice with the cores swapped"
+    )
     parser.add_argument("script", help="the benchmark, relative to a checkout's root")
     parser.add_argument("args", nargs=argparse.REMAINDER, help="the benchmark's own arguments")
     args = parser.parse_args()
-    result = side_by_side(args.baseline, args.script, args.args)
+    if args.pin:
+        cores = sorted(os.sched_getaffinity(0))[:2]
+        if len(cores) < 2:
+            raise SystemExit("--pin needs two cores")
+        rounds = [
+            {**side_by_side(args.baseline, args.script, args.args, pair), "cores": list(pair)}
+            for pair in ((cores[0], cores[1]), (cores[1], cores[0]))
+        ]
+        result: dict[str, Any] = {"script": args.script, "args": args.args, "pinned": rounds}
+    else:
+        result = side_by_side(args.baseline, args.script, args.args)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(result, indent=1))
     print(f"wrote {args.out}")
