@@ -245,6 +245,19 @@ def test_image_lines_of_too_few_points_is_empty() -> None:
     assert sorted(found.indices.tolist()) == list(range(12))
 
 
+def test_a_peak_of_min_points_votes_is_a_line_and_one_fewer_is_not() -> None:
+    """With 14 points left after the first line (enough to look again), a second line of 11
+    collinear points has a peak of 11 votes: under ``min_points`` = 12, no line; of 12, one."""
+    first = np.column_stack([np.arange(0.0, 24.0, 2.0), np.zeros(12)])  # 12 points, y = 0
+    strays = np.array([[5.0, 40.0], [37.0, 71.0], [61.0, 23.0]])  # on no line with the rest
+    for n, expected in ((11, 1), (12, 2)):
+        second = np.column_stack([np.full(n, 100.0), np.arange(20.0, 20.0 + 3 * n, 3.0)])
+        points = np.vstack([first, second, strays])
+        lines = image_lines(points, tol_px=1.0, min_points=12, split_gap_px=5.0)
+        found = sorted(sorted(line.indices.tolist()) for line in lines)
+        assert found == [list(range(12)), list(range(12, 12 + n))][:expected]
+
+
 def test_image_lines_groups_collinear_points_and_splits_at_gaps() -> None:
     rng = np.random.default_rng(0)
     t = np.arange(0.0, 200.0, 1.0)
