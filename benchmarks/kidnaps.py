@@ -10,11 +10,13 @@ perception (:meth:`spl_env.robots.nao.NaoRobot.place`). At the end of each inter
 position error of the believed pose, and whether it lies on the correct end, nearer the true
 pose than its twin through the centre spot (the field's symmetry), and how many of the
 recogniser's observations of the end the camera faces were right and wrong (against the true
-camera heading) after the walk-on. The same episodes beside it with the recogniser's
-database filled on the walk-on alone, as in the seed (``perception.natural_landmarks
-.learn_in_play=False``; by default views are stored in play too), and without natural
-landmarks (``field_end="none"``): the field features alone relocalise on the truth or its
-twin. Seeds 0-4 are for tuning; 100 and up are held out.
+camera heading) after the walk-on, and likewise of the side board it faces
+(``side_observation``). The same episodes beside it with views of the goal areas only
+(``perception.natural_landmarks.side_boards=False``), with those filled on the walk-on alone,
+as in the seed (``side_boards=False`` and ``learn_in_play=False``; by default views are
+stored in play too), and without natural landmarks (``field_end="none"``): the field features
+alone relocalise on the truth or its twin. Seeds 0-4 are for tuning; 100 and up are held
+out.
 
 Per kidnap the JSON also holds what the walk-on stored (views facing each goal), the views
 stored in play so far (``learned``) and the interval's trace: each field-end observation
@@ -55,9 +57,14 @@ from spl_env.envs.core import SplEnv
 RESULTS = Path("benchmarks/results")
 VARIANTS: dict[str, dict[str, Any]] = {  # env overrides of each localisation
     "natural landmarks": {"perception.field_end": "bag_of_words"},
-    "walk-on views only": {
+    "goal areas only": {
+        "perception.field_end": "bag_of_words",
+        "perception.natural_landmarks.side_boards": False,
+    },
+    "walk-on views only": {  # the seed's
         "perception.field_end": "bag_of_words",
         "perception.natural_landmarks.learn_in_play": False,
+        "perception.natural_landmarks.side_boards": False,
     },
     "field features alone": {"perception.field_end": "none"},
 }
@@ -95,6 +102,7 @@ def episode(variant: dict[str, Any], seed: int, args: argparse.Namespace) -> lis
     }
     end_steps = {s + int(args.interval * steps_per_s) for s in kidnap_steps}
     seen = {"right": 0, "wrong": 0}  # field-end observations against the true facing
+    sides = {"right": 0, "wrong": 0}  # side-board observations likewise
     trace: list[list[Any]] = []  # since the last kidnap (_trace_step)
     counts = (0, 0)  # the pose provider's relocalisations and half turns so far
     database: dict[str, int] = {}
@@ -103,7 +111,9 @@ def episode(variant: dict[str, Any], seed: int, args: argparse.Namespace) -> lis
         obs, _, _, _, info = env.step(action)
         if step == int(args.walk_on * steps_per_s):
             database = _database_labels(core)
-        counts = _trace_step(core, pose_provider, info, seen, trace, counts, step / steps_per_s)
+        counts = _trace_step(
+            core, pose_provider, info, (seen, sides), trace, counts, step / steps_per_s
+        )
         if step in end_steps:
             truth = info["ground_truth"]["robot_pose"]
             belief = info["perception"]["pose"]
@@ -115,12 +125,14 @@ def episode(variant: dict[str, Any], seed: int, args: argparse.Namespace) -> lis
                     "twin_error_m": twin,
                     "correct_end": bool(error < twin),
                     "end_observations": dict(seen),  # since the last kidnap
+                    "side_observations": dict(sides),
                     "database": database,
                     "learned": getattr(core.pipeline.provider(FIELD_END), "learned", 0),
                     "trace": trace,
                 }
             )
             seen = {"right": 0, "wrong": 0}
+            sides = {"right": 0, "wrong": 0}
             trace = []
         if step in kidnap_steps:
             others = core.robots[1:]
@@ -143,25 +155,30 @@ def _trace_step(
     core: SplEnv,
     pose_provider: FieldFeaturePose,
     info: dict[str, Any],
-    seen: dict[str, int],
+    seen: tuple[dict[str, int], dict[str, int]],
     trace: list[list[Any]],
     counts: tuple[int, int],
     time_s: float,
 ) -> tuple[int, int]:
-    """Count this step's field-end observation in ``seen`` (against the true camera heading)
-    and append to ``trace`` ``[time (s), event, right]``: event ``"obs+1"``/``"obs-1"`` (an
-    away / home observation; right: it is the end the camera faces, with its net votes),
-    ``"reloc"`` or ``"turn"`` (the pose provider relocalised or turned through the centre
-    spot; right: the pose is now on the correct end). Returns the provider's counts."""
+    """Count this step's field-end and side-board observations in ``seen`` (against the true
+    camera heading) and append to ``trace`` ``[time (s), event, right]``: event
+    ``"obs+1"``/``"obs-1"`` (an away / home observation; right: it is the end the camera
+    faces, with its net votes), ``"side+1"``/``"side-1"`` (the +y / -y board), ``"reloc"`` or
+    ``"turn"`` (the pose provider relocalised or turned through the centre spot; right: the
+    pose is now on the correct end). Returns the provider's counts."""
     belief = core.perception_output.get(FIELD_END)
-    observation = getattr(belief, "observation", 0)
     truth = info["ground_truth"]["robot_pose"]
-    if observation:
-        camera = truth[2] + info["ground_truth"]["head"][0]
-        facing = AWAY if math.cos(camera) > 0 else HOME
-        right = observation == facing
-        seen["right" if right else "wrong"] += 1
-        trace.append([round(time_s, 1), f"obs{observation:+d}", right, getattr(belief, "votes", 0)])
+    camera = truth[2] + info["ground_truth"]["head"][0]
+    facing = (AWAY if math.cos(camera) > 0 else HOME, 1 if math.sin(camera) > 0 else -1)
+    observed = (getattr(belief, "observation", 0), getattr(belief, "side_observation", 0))
+    for name, observation, faced, tally in zip(
+        ("obs", "side"), observed, facing, seen, strict=True
+    ):
+        if observation:
+            right = observation == faced
+            tally["right" if right else "wrong"] += 1
+            entry = [round(time_s, 1), f"{name}{observation:+d}", right]
+            trace.append(entry + ([getattr(belief, "votes", 0)] if name == "obs" else []))
     now = (pose_provider.relocalisations, pose_provider.half_turns)
     for event, before, after in zip(("reloc", "turn"), counts, now, strict=True):
         if after != before:
@@ -221,19 +238,27 @@ def main() -> None:
 def summary(kidnaps: list[dict[str, Any]], per_episode: int) -> dict[str, Any]:
     """One variant's row: its ``kidnaps`` (each episode's ``per_episode`` in turn) counted."""
     correct = [r for r in kidnaps if r["correct_end"]]
-    observations = {
-        verdict: sum(r["end_observations"][verdict] for r in kidnaps)
-        for verdict in ("right", "wrong")
-    }
+    none = {"right": 0, "wrong": 0}  # a run from before side-board views were counted
+    observations, sides = (
+        {v: sum(r.get(key, none)[v] for r in kidnaps) for v in ("right", "wrong")}
+        for key in ("end_observations", "side_observations")
+    )
+    counted_sides = all("side_observations" in r for r in kidnaps)
     return {
         "end_observations": observations,
+        "side_observations": sides if counted_sides else None,
         "kidnaps": len(kidnaps),
         "correct_end": len(correct),
         "mean_error_correct_end_m": float(np.mean([r["error_m"] for r in correct]))
         if correct
         else math.nan,
         "median_error_m": float(np.median([r["error_m"] for r in kidnaps])),
-        "silent_intervals": sum(1 for r in kidnaps if not any(r["end_observations"].values())),
+        "silent_intervals": sum(
+            1
+            for r in kidnaps
+            if not any(r["end_observations"].values())
+            and not any(r.get("side_observations", none).values())
+        ),
         "stored": [kidnaps[k]["database"] for k in range(0, len(kidnaps), per_episode)],
         "all": kidnaps,
     }
@@ -249,14 +274,20 @@ def write_report(report: dict[str, Any], out: Path) -> str:
         f"{report['interval_s']:.0f} s, seeds {first}-{last} (seed 004 Table 4)",
         "",
         "| localisation | correct end | mean error on the correct end (m) | median error (m) "
-        "| field-end observations right / wrong | intervals without one "
-        "| walk-on views stored (away + home, per episode) |",
-        "|---|---|---|---|---|---|---|",
+        "| field-end observations right / wrong | side-board observations right / wrong "
+        "| intervals without either | walk-on views of the goal areas (away + home, per "
+        "episode) |",
+        "|---|---|---|---|---|---|---|---|",
         *(
             f"| {name} | {r['correct_end']} of {r['kidnaps']} | "
             f"{r['mean_error_correct_end_m']:.3f} | {r['median_error_m']:.3f} | "
             f"{r['end_observations']['right']} / {r['end_observations']['wrong']} | "
-            f"{r['silent_intervals']} | "
+            + (
+                f"{r['side_observations']['right']} / {r['side_observations']['wrong']} | "
+                if r.get("side_observations")
+                else "not counted | "
+            )
+            + f"{r['silent_intervals']} | "
             + ", ".join(f"{d['away']}+{d['home']}" if d else "-" for d in r["stored"])
             + " |"
             for name, r in report["variants"].items()

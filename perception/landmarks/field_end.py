@@ -112,7 +112,11 @@ class FieldEndBelief:
     """One frame's belief: ``p_away`` = P(facing the away goal), ``certain`` (+1 away, -1
     home, 0 neither), the window's ``away_observations`` / ``home_observations``, this frame's
     net ``votes``, its ``observation`` (+1 an away one, -1 a home one, 0 none: Algorithm 1's
-    awayGoalObs / homeGoalObs) and its ``hits`` (empty for a frame not facing a goal area)."""
+    awayGoalObs / homeGoalObs) and its ``hits`` (empty for a frame not facing a goal area).
+    ``side_observation``: not the seed's, the side board a second recogniser of side-board
+    views saw in this frame (+1 the +y one, -1 the -y one, 0 none;
+    :class:`perception.providers.field_end.NaturalLandmarkFieldEnd`); under the field's
+    half-turn symmetry the sides swap as the ends do."""
 
     p_away: float
     certain: int
@@ -121,6 +125,7 @@ class FieldEndBelief:
     votes: float
     hits: tuple[Hit, ...]
     observation: int = 0
+    side_observation: int = 0
 
 
 class FieldEndRecogniser:

@@ -140,7 +140,9 @@ class RelocalisationConfig:
     Mirrored: the field is symmetric end to end, so the features alone may place the filter on
     the twin of the true pose. Each natural-landmark observation of the end the camera faces
     (:attr:`perception.landmarks.field_end.FieldEndBelief.observation`) agrees or disagrees
-    with the end the filter's heading faces; over the last ``end_window_frames`` frames, with
+    with the end the filter's heading faces, and likewise each observation of the side board
+    the camera faces (``side_observation``, not the seed's: the sides swap under the same
+    half turn) with the side the heading faces; over the last ``end_window_frames`` frames, with
     ``d`` disagreeing and ``a`` agreeing, the chance the filter is mirrored is the mean of
     Beta(1 + d, 1 + a), and above ``end_confidence`` the filter is turned through the centre
     spot, and the window with it (each disagreeing view now agrees), so that as much evidence
@@ -240,13 +242,18 @@ class FieldFeaturePose(Provider):
         )
 
     def _weigh_the_field_end(self, belief: FieldEndBelief, head_yaw: float) -> None:
-        """Count this frame's field-end observation against the filter's heading; turn the
-        filter through the centre spot when it is likely mirrored (RelocalisationConfig)."""
-        theta = self.filter.pose[2]
-        facing = AWAY if math.cos(theta + head_yaw) > 0 else HOME
-        self._agreement.append(
-            0 if belief.observation == 0 else (1 if belief.observation == facing else -1)
-        )
+        """Count this frame's field-end observation (or, failing one, its side-board
+        observation) against the filter's heading; turn the filter through the centre spot
+        when it is likely mirrored (RelocalisationConfig)."""
+        heading = self.filter.pose[2] + head_yaw
+        if belief.observation:
+            facing = AWAY if math.cos(heading) > 0 else HOME
+            self._agreement.append(1 if belief.observation == facing else -1)
+        elif belief.side_observation:
+            side = 1 if math.sin(heading) > 0 else -1
+            self._agreement.append(1 if belief.side_observation == side else -1)
+        else:
+            self._agreement.append(0)
         disagree = sum(1 for a in self._agreement if a < 0)
         agree = sum(1 for a in self._agreement if a > 0)
         if (1 + disagree) / (2 + disagree + agree) > self.relocalisation.end_confidence:

@@ -16,7 +16,11 @@ from perception.landmarks.surf1d import Surf1dFeatures
 from perception.landmarks.vocabulary import default_vocabulary
 from perception.pipeline import PerceptionPipeline, PipelineConfig
 from perception.providers.base import PREVIOUS, PerceptionContext
-from perception.providers.field_end import FieldEndProviderConfig, NaturalLandmarkFieldEnd
+from perception.providers.field_end import (
+    UNKNOWN,
+    FieldEndProviderConfig,
+    NaturalLandmarkFieldEnd,
+)
 from perception.representations import (
     FIELD_END,
     FIELD_FEATURES,
@@ -296,6 +300,8 @@ def test_bad_provider_settings_are_refused() -> None:
         FieldEndProviderConfig(walk_on_needs_post=1)  # type: ignore[arg-type]
     with pytest.raises(TypeError, match="learn_in_play"):
         FieldEndProviderConfig(learn_in_play=1)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="side_boards"):
+        FieldEndProviderConfig(side_boards=1)  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="learn_after_agreeing"):
         FieldEndProviderConfig(learn_after_agreeing=0)
 
@@ -313,6 +319,110 @@ def test_facing_a_goal_area_means_the_optical_axis_meets_the_end_between_the_sid
     outside = math.atan2(0.3, edge - 1.0)  # 0.3 m past: beyond the side line's extension
     assert provider._facing(np.array([1.0, y0, 0.0]), inside) == AWAY
     assert provider._facing(np.array([1.0, y0, 0.0]), outside) == 0
+
+
+def test_facing_a_side_board_means_the_optical_axis_meets_it_between_the_end_lines() -> None:
+    provider = NaturalLandmarkFieldEnd(FieldEndProviderConfig(), CONTEXT)
+    field = CONTEXT.field
+    edge = field.half_width_m + field.border_strip_m
+    centre = np.array([0.0, 0.0, 0.0])
+    assert provider._facing_side(centre, math.pi / 2) == 1
+    assert provider._facing_side(centre, -math.pi / 2) == -1
+    assert provider._facing_side(centre, 0.0) == 0  # an end
+    assert provider._facing_side(centre, math.radians(45.0)) == 0  # beyond the tolerance
+    # from near the end line, a heading aiming just inside / outside the side's corner
+    x0 = field.half_length_m - 0.2
+    inside = math.atan2(edge - 1.0, 0.1)  # meets the edge 0.1 m past x0: inside
+    outside = math.atan2(edge - 1.0, 0.3)  # 0.3 m past: beyond the end line's extension
+    assert provider._facing_side(np.array([x0, 1.0, 0.0]), inside) == 1
+    assert provider._facing_side(np.array([x0, 1.0, 0.0]), outside) == 0
+
+
+def test_only_features_on_the_faced_sides_boards_are_kept() -> None:
+    provider = NaturalLandmarkFieldEnd(FieldEndProviderConfig(), CONTEXT)
+    field = CONTEXT.field
+    edge = field.half_width_m + field.border_strip_m
+    half_length = field.half_length_m + field.border_strip_m
+    seen = view(AWAY)
+    pose = np.array([3.0, edge - 5.0, math.pi / 2])  # 5 m from the +y edge, facing it
+    on_side = provider._on_side(seen, pose, 1)
+    # a bearing b meets the edge at x = 3 - 5 tan(b): the board spans |x| <= half_length
+    left, right = math.atan2(3.0 + half_length, 5.0), math.atan2(3.0 - half_length, 5.0)
+    np.testing.assert_array_equal(on_side, (seen.bearings <= left) & (seen.bearings >= right))
+    assert on_side.any() and not on_side.all()
+    assert not provider._on_side(seen, pose, -1).any()  # facing +y, nothing on -y's boards
+
+
+@pytest.mark.parametrize("side_boards", [True, False])
+def test_side_board_views_stored_on_the_walk_on_tell_the_sides_apart(side_boards: bool) -> None:
+    """Walking on at the centre spot facing +y (one board's words) and -y (another's); in
+    play the pose faces +y: a view of the +y board is a side observation of +1, of the -y
+    board -1 (the pose is mirrored), and no end observation; without ``side_boards`` none."""
+    config = FieldEndProviderConfig(walk_on_s=1.0, side_boards=side_boards)
+    provider = NaturalLandmarkFieldEnd(config, CONTEXT)
+    provider.reset(Prior(pose=np.zeros(3), rng=np.random.default_rng(0)))
+    for side, heading in ((1, math.pi / 2), (-1, -math.pi / 2)):
+        for k in range(5):
+            inputs = {
+                HORIZON_FEATURES: view(AWAY if side > 0 else HOME, shift_px=2.0 * k),
+                FIELD_FEATURES: (),
+                PREVIOUS + SELF_POSE: tracked(heading, accepted=True),
+            }
+            assert provider.update(inputs, 0.1 * k) == UNKNOWN
+    assert len(provider._recogniser.database) == 0  # type: ignore[union-attr]
+    t = 1.0
+    for words, expected in ((AWAY, 1), (HOME, -1)):
+        observed = set()
+        for k in range(10):
+            seen = {
+                HORIZON_FEATURES: view(words, shift_px=5.0 + k % 3),
+                FIELD_FEATURES: (),
+                PREVIOUS + SELF_POSE: tracked(math.pi / 2, accepted=False),
+            }
+            belief = provider.update(seen, t)
+            assert belief.observation == 0
+            observed.add(belief.side_observation)
+            t += 0.1
+        if side_boards:
+            assert expected in observed and -expected not in observed
+        else:
+            assert observed == {0}
+
+
+@pytest.mark.parametrize("disagreed", [False, True])
+def test_side_views_are_learned_in_play_while_the_pose_is_trusted(disagreed: bool) -> None:
+    """After a walk-on facing both sides, a novel view of the +y board (the pose facing +y)
+    is stored on the next accepted frame; not once a view of the -y board disagreed."""
+    config = FieldEndProviderConfig(walk_on_s=1.0)
+    provider = NaturalLandmarkFieldEnd(config, CONTEXT)
+    provider.reset(Prior(pose=np.zeros(3), rng=np.random.default_rng(0)))
+    for side, heading in ((1, math.pi / 2), (-1, -math.pi / 2)):
+        for k in range(5):
+            inputs = {
+                HORIZON_FEATURES: view(AWAY if side > 0 else HOME, shift_px=2.0 * k),
+                FIELD_FEATURES: (),
+                PREVIOUS + SELF_POSE: tracked(heading, accepted=True),
+            }
+            provider.update(inputs, 0.1 * k)
+    sides = provider._sides
+    assert sides is not None
+    size, t = len(sides.database), 1.0
+    facing_plus_y = tracked(math.pi / 2, accepted=True)
+    if disagreed:  # the -y board seen while the pose faces +y, until an observation says so
+        for _ in range(20):
+            seen = {
+                HORIZON_FEATURES: view(HOME),
+                FIELD_FEATURES: (),
+                PREVIOUS + SELF_POSE: facing_plus_y,
+            }
+            t += 0.1
+            if provider.update(seen, t).side_observation == -1:
+                break
+        else:
+            pytest.fail("the -y board's stored views never gave a -y observation")
+    play(provider, t + 0.1, view(AWAY, novel=True), facing_plus_y)
+    play(provider, t + 0.2, view(AWAY), facing_plus_y)
+    assert len(sides.database) == size + (0 if disagreed else 1)
 
 
 def test_features_on_the_faced_goal_are_left_out() -> None:

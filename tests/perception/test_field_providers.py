@@ -3,6 +3,7 @@ at a known pose, and the field-feature pose tracking a walk that dead reckoning 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -145,6 +146,26 @@ def test_field_end_observations_turn_a_mirrored_filter_round() -> None:
         estimate = provider.update({**inputs, FIELD_END: belief(AWAY)}, 0.4 + 0.1 * k)
         assert not estimate.restarted
     np.testing.assert_allclose(provider.filter.pose, [-1.0, -0.5, -0.2], atol=1e-12)
+    assert provider.half_turns == 1
+
+
+def test_side_board_observations_turn_a_mirrored_filter_round_too() -> None:
+    """The filter's heading faces the +y side (pi / 2) while the camera sees the -y board
+    three frames running: the half turn, as for a disagreeing end; then views of the -y board
+    agree with the turned heading (-pi / 2) and nothing more happens."""
+    config = PipelineConfig()
+    relocalisation = RelocalisationConfig(end_window_frames=10, end_confidence=0.75)
+    provider = FieldFeaturePose(config.sensor_model, config.pose_filter, relocalisation, context())
+    provider.reset(Prior(pose=np.array([1.0, 0.5, math.pi / 2]), rng=np.random.default_rng(0)))
+    still = OdometryStep(delta=np.zeros(3), walk_delta=np.zeros(3))
+    inputs = {ODOMETRY: still, FIELD_FEATURES: (), "camera_state": STATE}
+    minus_y = dataclasses.replace(belief(0), side_observation=-1)
+    for k in range(2):
+        assert not provider.update({**inputs, FIELD_END: minus_y}, 0.1 * k).restarted
+    assert provider.update({**inputs, FIELD_END: minus_y}, 0.2).restarted
+    np.testing.assert_allclose(provider.filter.pose, [-1.0, -0.5, -math.pi / 2], atol=1e-12)
+    for k in range(5):
+        provider.update({**inputs, FIELD_END: minus_y}, 0.3 + 0.1 * k)
     assert provider.half_turns == 1
 
 
