@@ -26,7 +26,7 @@ on the correct end after it?). ``--variant`` runs one localisation only.
 Seeds ``--seed`` .. ``--seed + --episodes - 1`` (100-101 by default: held out), ``--kidnaps``
 per episode (the seed: 10 kidnaps).
 
-    python benchmarks/kidnaps.py                  # ~15 min on 2 cores
+    python benchmarks/kidnaps.py                  # ~20 min on one core
     python benchmarks/kidnaps.py --episodes 1 --kidnaps 3
     python benchmarks/kidnaps.py --seed 0 --set perception.natural_landmarks.walk_on_s=30
     python benchmarks/kidnaps.py --seed 0 --episodes 5 --variant "natural landmarks"
