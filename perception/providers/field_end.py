@@ -44,7 +44,6 @@ from numpy.typing import NDArray
 from perception.geometry import FloatArray, range_bearing
 from perception.landmarks.field_end import (
     AWAY,
-    HOME,
     FieldEndBelief,
     FieldEndConfig,
     FieldEndRecogniser,
@@ -61,6 +60,10 @@ from perception.representations import (
 )
 from perception.types import TrackedPoseEstimate
 from perception.validation import check_bool, check_int, check_positive
+
+ENDS, SIDES = 0, 1  # the field axis across a board: x for the end boards, y for the side ones
+# the field headings (rad) facing the +1 and the -1 board of each axis
+_BOARD_HEADINGS = ((0.0, math.pi), (math.pi / 2, -math.pi / 2))
 
 UNKNOWN = FieldEndBelief(
     p_away=0.5, certain=0, away_observations=0, home_observations=0, votes=0, hits=()
@@ -154,6 +157,8 @@ class NaturalLandmarkFieldEnd(Provider):
     def __init__(self, config: FieldEndProviderConfig, context: PerceptionContext) -> None:
         self.config = config
         self.field = context.field
+        # the carpet's lines' half extents (m) along x and y (ENDS, SIDES)
+        self._half_extents = (self.field.half_length_m, self.field.half_width_m)
         self.vocabulary = default_vocabulary()
         self._recogniser: FieldEndRecogniser | None = None
         # views of the side boards (``side_boards``): labels AWAY / HOME stand for the +y / -y
@@ -190,8 +195,8 @@ class NaturalLandmarkFieldEnd(Provider):
         if isinstance(previous, TrackedPoseEstimate) and previous.restarted:
             self._agreeing = 0  # the pose may have jumped: trust it again once views agree
         heading = pose[2] + seen.head_yaw
-        end = self._facing(pose, heading)
-        side = self._facing_side(pose, heading) if sides is not None else 0
+        end = self._facing(pose, heading, ENDS)
+        side = self._facing(pose, heading, SIDES) if sides is not None else 0
         end_view = self._end_view(seen, pose, end)
         side_view = self._side_view(seen, pose, side)
         if time_s - self._start_s < self.config.walk_on_s:
@@ -228,7 +233,9 @@ class NaturalLandmarkFieldEnd(Provider):
         goal, seen from ``pose`` (3,); none when not facing an end (``end`` 0)."""
         if not end:
             return np.zeros(0, dtype=np.int64), np.zeros(0)
-        kept = seen.without(self._on_goal(seen, pose, end) | ~self._on_end(seen, pose, end))
+        kept = seen.without(
+            self._on_goal(seen, pose, end) | ~self._on_boards(seen, pose, end, ENDS)
+        )
         return self.vocabulary.quantise(kept.features.descriptors), kept.features.x
 
     def _side_view(
@@ -238,7 +245,7 @@ class NaturalLandmarkFieldEnd(Provider):
         +y, -1: -y) seen from ``pose`` (3,); none when not facing a side (``side`` 0)."""
         if not side:
             return np.zeros(0, dtype=np.int64), np.zeros(0)
-        kept = seen.without(~self._on_side(seen, pose, side))
+        kept = seen.without(~self._on_boards(seen, pose, side, SIDES))
         return self.vocabulary.quantise(kept.features.descriptors), kept.features.x
 
     def _on_goal(self, seen: HorizonFeatures, pose: FloatArray, end: int) -> NDArray[np.bool_]:
@@ -251,62 +258,43 @@ class NaturalLandmarkFieldEnd(Provider):
         low, high = bearings.min() - margin, bearings.max() + margin
         return (seen.bearings >= low) & (seen.bearings <= high)
 
-    def _on_end(self, seen: HorizonFeatures, pose: FloatArray, end: int) -> NDArray[np.bool_]:
-        """(N,) bool: the features whose ray from ``pose`` (3,) (field frame) meets the
-        ``end``'s carpet edge within the carpet's width: on that end's boards, not a side's."""
-        field = self.field
+    def _on_boards(
+        self, seen: HorizonFeatures, pose: FloatArray, board: int, axis: int
+    ) -> NDArray[np.bool_]:
+        """(N,) bool: the features whose ray from ``pose`` (3,) (field frame) meets the carpet
+        edge of ``board`` (+1 / -1) of ``axis`` (:data:`ENDS`: AWAY / HOME, :data:`SIDES`: +y
+        / -y) within the carpet's extent along that edge: on that board, not a neighbour's."""
         rays = pose[2] + seen.head_yaw + seen.bearings
-        towards = np.cos(rays) * end > 1e-9
+        towards = (np.cos(rays) if axis == ENDS else np.sin(rays)) * board > 1e-9
         with np.errstate(invalid="ignore", divide="ignore"):
-            y_hit = self._edge_y(pose, rays, end)
-        return towards & (np.abs(y_hit) <= field.half_width_m + field.border_strip_m)
+            hit = self._edge_crossing(pose, rays, board, axis)
+        return towards & (np.abs(hit) <= self._half_extents[1 - axis] + self.field.border_strip_m)
 
-    def _edge_y(self, pose: FloatArray, rays: FloatArray | float, end: int) -> FloatArray:
-        """Where rays from ``pose`` (3,) at field headings ``rays`` (rad) cross the ``end``'s
-        carpet edge: their y (m, field frame)."""
-        edge_x = end * (self.field.half_length_m + self.field.border_strip_m)
-        return pose[1] + np.tan(rays) * (edge_x - pose[0])
+    def _edge_crossing(
+        self, pose: FloatArray, rays: FloatArray | float, board: int, axis: int
+    ) -> FloatArray:
+        """Where rays from ``pose`` (3,) at field headings ``rays`` (rad) cross the carpet edge
+        of ``board`` of ``axis``: their y for an end's edge, their x for a side's (m, field
+        frame)."""
+        edge = board * (self._half_extents[axis] + self.field.border_strip_m)
+        if axis == ENDS:
+            return pose[1] + np.tan(rays) * (edge - pose[0])
+        return pose[0] + (edge - pose[1]) * np.cos(rays) / np.sin(rays)
 
-    def _facing(self, pose: FloatArray, heading: float) -> int:
-        """AWAY when the camera at ``pose`` (3,) (m, m, rad, field frame) with field heading
-        ``heading`` (rad) faces the +x goal area, HOME the -x one, else 0 (module docstring)."""
+    def _facing(self, pose: FloatArray, heading: float, axis: int) -> int:
+        """The board of ``axis`` (+1 / -1: for :data:`ENDS` AWAY / HOME, the +x / -x goal
+        area; for :data:`SIDES` the +y / -y board) that the camera at ``pose`` (3,) (m, m,
+        rad, field frame) with field heading ``heading`` (rad) faces, else 0: within
+        ``facing_tolerance_rad`` of the board's direction, its optical axis meeting the
+        board's carpet edge between the other axis' outer lines' extensions (module
+        docstring)."""
         tolerance = self.config.facing_tolerance_rad
-        if abs(math.remainder(heading, math.tau)) <= tolerance:
-            end = AWAY
-        elif abs(math.remainder(heading - math.pi, math.tau)) <= tolerance:
-            end = HOME
+        plus, minus = _BOARD_HEADINGS[axis]
+        if abs(math.remainder(heading - plus, math.tau)) <= tolerance:
+            board = 1
+        elif abs(math.remainder(heading - minus, math.tau)) <= tolerance:
+            board = -1
         else:
             return 0
-        axis_y = float(self._edge_y(pose, heading, end))
-        return end if abs(axis_y) <= self.field.half_width_m else 0
-
-    def _on_side(self, seen: HorizonFeatures, pose: FloatArray, side: int) -> NDArray[np.bool_]:
-        """(N,) bool: the features whose ray from ``pose`` (3,) (field frame) meets the
-        ``side``'s (+1: +y, -1: -y) carpet edge within the carpet's length: on that side's
-        boards, not an end's."""
-        field = self.field
-        rays = pose[2] + seen.head_yaw + seen.bearings
-        towards = np.sin(rays) * side > 1e-9
-        with np.errstate(invalid="ignore", divide="ignore"):
-            x_hit = self._edge_x(pose, rays, side)
-        return towards & (np.abs(x_hit) <= field.half_length_m + field.border_strip_m)
-
-    def _edge_x(self, pose: FloatArray, rays: FloatArray | float, side: int) -> FloatArray:
-        """Where rays from ``pose`` (3,) at field headings ``rays`` (rad) cross the ``side``'s
-        carpet edge: their x (m, field frame)."""
-        edge_y = side * (self.field.half_width_m + self.field.border_strip_m)
-        return pose[0] + (edge_y - pose[1]) * np.cos(rays) / np.sin(rays)
-
-    def _facing_side(self, pose: FloatArray, heading: float) -> int:
-        """+1 when the camera at ``pose`` (3,) with field heading ``heading`` (rad) faces the
-        +y side's boards (within ``facing_tolerance_rad`` of +y, its optical axis meeting
-        that side's carpet edge between the end lines' extensions), -1 the -y side's, else 0."""
-        tolerance = self.config.facing_tolerance_rad
-        if abs(math.remainder(heading - math.pi / 2, math.tau)) <= tolerance:
-            side = 1
-        elif abs(math.remainder(heading + math.pi / 2, math.tau)) <= tolerance:
-            side = -1
-        else:
-            return 0
-        axis_x = float(self._edge_x(pose, heading, side))
-        return side if abs(axis_x) <= self.field.half_length_m else 0
+        axis_hit = float(self._edge_crossing(pose, heading, board, axis))
+        return board if abs(axis_hit) <= self._half_extents[1 - axis] else 0

@@ -17,6 +17,8 @@ from perception.landmarks.vocabulary import default_vocabulary
 from perception.pipeline import PerceptionPipeline, PipelineConfig
 from perception.providers.base import PREVIOUS, PerceptionContext
 from perception.providers.field_end import (
+    ENDS,
+    SIDES,
     UNKNOWN,
     FieldEndProviderConfig,
     NaturalLandmarkFieldEnd,
@@ -97,6 +99,23 @@ def walked_on(config: FieldEndProviderConfig) -> NaturalLandmarkFieldEnd:
                 PREVIOUS + SELF_POSE: tracked(heading, accepted=True),
             }
             provider.update(inputs, 0.1 * k)
+    return provider
+
+
+def walked_on_sides(config: FieldEndProviderConfig) -> NaturalLandmarkFieldEnd:
+    """A provider after a walk-on (``config.walk_on_s`` <= 1 s) of five views of each side
+    board at the centre spot: the +y board shows the words of :func:`view` ``(AWAY)``, the -y
+    board those of ``view(HOME)``; every walk-on frame returns the unknown belief."""
+    provider = NaturalLandmarkFieldEnd(config, CONTEXT)
+    provider.reset(Prior(pose=np.zeros(3), rng=np.random.default_rng(0)))
+    for side, heading in ((1, math.pi / 2), (-1, -math.pi / 2)):
+        for k in range(5):
+            inputs = {
+                HORIZON_FEATURES: view(AWAY if side > 0 else HOME, shift_px=2.0 * k),
+                FIELD_FEATURES: (),
+                PREVIOUS + SELF_POSE: tracked(heading, accepted=True),
+            }
+            assert provider.update(inputs, 0.1 * k) == UNKNOWN
     return provider
 
 
@@ -310,15 +329,15 @@ def test_facing_a_goal_area_means_the_optical_axis_meets_the_end_between_the_sid
     provider = NaturalLandmarkFieldEnd(FieldEndProviderConfig(), CONTEXT)
     field = CONTEXT.field
     edge = field.half_length_m + field.border_strip_m
-    assert provider._facing(np.array([0.0, 0.0, 0.0]), 0.0) == AWAY
-    assert provider._facing(np.array([0.0, 0.0, 0.0]), math.pi) == HOME
-    assert provider._facing(np.array([0.0, 0.0, 0.0]), math.pi / 2) == 0  # the side line
+    assert provider._facing(np.array([0.0, 0.0, 0.0]), 0.0, ENDS) == AWAY
+    assert provider._facing(np.array([0.0, 0.0, 0.0]), math.pi, ENDS) == HOME
+    assert provider._facing(np.array([0.0, 0.0, 0.0]), math.pi / 2, ENDS) == 0  # the side line
     # from near the side line, a heading aiming just inside / outside the end's corner
     y0 = field.half_width_m - 0.2
     inside = math.atan2(0.1, edge - 1.0)  # meets the edge 0.1 m past y0: inside
     outside = math.atan2(0.3, edge - 1.0)  # 0.3 m past: beyond the side line's extension
-    assert provider._facing(np.array([1.0, y0, 0.0]), inside) == AWAY
-    assert provider._facing(np.array([1.0, y0, 0.0]), outside) == 0
+    assert provider._facing(np.array([1.0, y0, 0.0]), inside, ENDS) == AWAY
+    assert provider._facing(np.array([1.0, y0, 0.0]), outside, ENDS) == 0
 
 
 def test_facing_a_side_board_means_the_optical_axis_meets_it_between_the_end_lines() -> None:
@@ -326,16 +345,16 @@ def test_facing_a_side_board_means_the_optical_axis_meets_it_between_the_end_lin
     field = CONTEXT.field
     edge = field.half_width_m + field.border_strip_m
     centre = np.array([0.0, 0.0, 0.0])
-    assert provider._facing_side(centre, math.pi / 2) == 1
-    assert provider._facing_side(centre, -math.pi / 2) == -1
-    assert provider._facing_side(centre, 0.0) == 0  # an end
-    assert provider._facing_side(centre, math.radians(45.0)) == 0  # beyond the tolerance
+    assert provider._facing(centre, math.pi / 2, SIDES) == 1
+    assert provider._facing(centre, -math.pi / 2, SIDES) == -1
+    assert provider._facing(centre, 0.0, SIDES) == 0  # an end
+    assert provider._facing(centre, math.radians(45.0), SIDES) == 0  # beyond the tolerance
     # from near the end line, a heading aiming just inside / outside the side's corner
     x0 = field.half_length_m - 0.2
     inside = math.atan2(edge - 1.0, 0.1)  # meets the edge 0.1 m past x0: inside
     outside = math.atan2(edge - 1.0, 0.3)  # 0.3 m past: beyond the end line's extension
-    assert provider._facing_side(np.array([x0, 1.0, 0.0]), inside) == 1
-    assert provider._facing_side(np.array([x0, 1.0, 0.0]), outside) == 0
+    assert provider._facing(np.array([x0, 1.0, 0.0]), inside, SIDES) == 1
+    assert provider._facing(np.array([x0, 1.0, 0.0]), outside, SIDES) == 0
 
 
 def test_only_features_on_the_faced_sides_boards_are_kept() -> None:
@@ -345,12 +364,12 @@ def test_only_features_on_the_faced_sides_boards_are_kept() -> None:
     half_length = field.half_length_m + field.border_strip_m
     seen = view(AWAY)
     pose = np.array([3.0, edge - 5.0, math.pi / 2])  # 5 m from the +y edge, facing it
-    on_side = provider._on_side(seen, pose, 1)
+    on_side = provider._on_boards(seen, pose, 1, SIDES)
     # a bearing b meets the edge at x = 3 - 5 tan(b): the board spans |x| <= half_length
     left, right = math.atan2(3.0 + half_length, 5.0), math.atan2(3.0 - half_length, 5.0)
     np.testing.assert_array_equal(on_side, (seen.bearings <= left) & (seen.bearings >= right))
     assert on_side.any() and not on_side.all()
-    assert not provider._on_side(seen, pose, -1).any()  # facing +y, nothing on -y's boards
+    assert not provider._on_boards(seen, pose, -1, SIDES).any()  # facing +y, nothing on -y's boards
 
 
 @pytest.mark.parametrize("side_boards", [True, False])
@@ -358,17 +377,7 @@ def test_side_board_views_stored_on_the_walk_on_tell_the_sides_apart(side_boards
     """Walking on at the centre spot facing +y (one board's words) and -y (another's); in
     play the pose faces +y: a view of the +y board is a side observation of +1, of the -y
     board -1 (the pose is mirrored), and no end observation; without ``side_boards`` none."""
-    config = FieldEndProviderConfig(walk_on_s=1.0, side_boards=side_boards)
-    provider = NaturalLandmarkFieldEnd(config, CONTEXT)
-    provider.reset(Prior(pose=np.zeros(3), rng=np.random.default_rng(0)))
-    for side, heading in ((1, math.pi / 2), (-1, -math.pi / 2)):
-        for k in range(5):
-            inputs = {
-                HORIZON_FEATURES: view(AWAY if side > 0 else HOME, shift_px=2.0 * k),
-                FIELD_FEATURES: (),
-                PREVIOUS + SELF_POSE: tracked(heading, accepted=True),
-            }
-            assert provider.update(inputs, 0.1 * k) == UNKNOWN
+    provider = walked_on_sides(FieldEndProviderConfig(walk_on_s=1.0, side_boards=side_boards))
     assert len(provider._recogniser.database) == 0  # type: ignore[union-attr]
     t = 1.0
     for words, expected in ((AWAY, 1), (HOME, -1)):
@@ -393,17 +402,7 @@ def test_side_board_views_stored_on_the_walk_on_tell_the_sides_apart(side_boards
 def test_side_views_are_learned_in_play_while_the_pose_is_trusted(disagreed: bool) -> None:
     """After a walk-on facing both sides, a novel view of the +y board (the pose facing +y)
     is stored on the next accepted frame; not once a view of the -y board disagreed."""
-    config = FieldEndProviderConfig(walk_on_s=1.0)
-    provider = NaturalLandmarkFieldEnd(config, CONTEXT)
-    provider.reset(Prior(pose=np.zeros(3), rng=np.random.default_rng(0)))
-    for side, heading in ((1, math.pi / 2), (-1, -math.pi / 2)):
-        for k in range(5):
-            inputs = {
-                HORIZON_FEATURES: view(AWAY if side > 0 else HOME, shift_px=2.0 * k),
-                FIELD_FEATURES: (),
-                PREVIOUS + SELF_POSE: tracked(heading, accepted=True),
-            }
-            provider.update(inputs, 0.1 * k)
+    provider = walked_on_sides(FieldEndProviderConfig(walk_on_s=1.0))
     sides = provider._sides
     assert sides is not None
     size, t = len(sides.database), 1.0
@@ -443,10 +442,10 @@ def test_only_features_on_the_faced_ends_boards_are_kept() -> None:
     half_width = field.half_width_m + field.border_strip_m
     seen = view(AWAY)
     pose = np.array([edge - 5.0, 3.0, 0.0])  # 5 m from the end, near the left side line
-    on_end = provider._on_end(seen, pose, AWAY)
+    on_end = provider._on_boards(seen, pose, AWAY, ENDS)
     # the end's boards span y in [-half_width, half_width] 5 m ahead, seen from y = 3 m: the
     # bearings from atan2(-half_width - 3, 5) to atan2(half_width - 3, 5), the corners'
     left, right = math.atan2(half_width - 3.0, 5.0), math.atan2(-half_width - 3.0, 5.0)
     np.testing.assert_array_equal(on_end, (seen.bearings <= left) & (seen.bearings >= right))
     assert on_end.any() and not on_end.all()
-    assert not provider._on_end(seen, pose, HOME).any()  # facing away, nothing on home's boards
+    assert not provider._on_boards(seen, pose, HOME, ENDS).any()  # nothing on home's boards
