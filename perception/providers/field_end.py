@@ -197,8 +197,8 @@ class NaturalLandmarkFieldEnd(Provider):
         heading = pose[2] + seen.head_yaw
         end = self._facing(pose, heading, ENDS)
         side = self._facing(pose, heading, SIDES) if sides is not None else 0
-        end_view = self._end_view(seen, pose, end)
-        side_view = self._side_view(seen, pose, side)
+        end_view = self._view(seen, pose, end, ENDS)
+        side_view = self._view(seen, pose, side, SIDES)
         if time_s - self._start_s < self.config.walk_on_s:
             post_visible = not self.config.walk_on_needs_post or any(
                 f.kind == "goal_post" for f in inputs[FIELD_FEATURES]
@@ -226,26 +226,18 @@ class NaturalLandmarkFieldEnd(Provider):
                 self._agreeing = self._agreeing + 1 if observed == faced else 0
         return belief
 
-    def _end_view(
-        self, seen: HorizonFeatures, pose: FloatArray, end: int
+    def _view(
+        self, seen: HorizonFeatures, pose: FloatArray, board: int, axis: int
     ) -> tuple[NDArray[np.int64], FloatArray]:
-        """The words (N,) and columns (N,) px of the features on the ``end``'s boards off its
-        goal, seen from ``pose`` (3,); none when not facing an end (``end`` 0)."""
-        if not end:
+        """The words (N,) and columns (N,) px of the features on ``board`` of ``axis`` (an
+        end's off its goal) seen from ``pose`` (3,); none when facing no board (``board``
+        0)."""
+        if not board:
             return np.zeros(0, dtype=np.int64), np.zeros(0)
-        kept = seen.without(
-            self._on_goal(seen, pose, end) | ~self._on_boards(seen, pose, end, ENDS)
-        )
-        return self.vocabulary.quantise(kept.features.descriptors), kept.features.x
-
-    def _side_view(
-        self, seen: HorizonFeatures, pose: FloatArray, side: int
-    ) -> tuple[NDArray[np.int64], FloatArray]:
-        """The words (N,) and columns (N,) px of the features on the ``side``'s board (+1:
-        +y, -1: -y) seen from ``pose`` (3,); none when not facing a side (``side`` 0)."""
-        if not side:
-            return np.zeros(0, dtype=np.int64), np.zeros(0)
-        kept = seen.without(~self._on_boards(seen, pose, side, SIDES))
+        left_out = ~self._on_boards(seen, pose, board, axis)
+        if axis == ENDS:
+            left_out |= self._on_goal(seen, pose, board)
+        kept = seen.without(left_out)
         return self.vocabulary.quantise(kept.features.descriptors), kept.features.x
 
     def _on_goal(self, seen: HorizonFeatures, pose: FloatArray, end: int) -> NDArray[np.bool_]:

@@ -111,7 +111,8 @@ def _tls(points: FloatArray) -> tuple[FloatArray, FloatArray]:
     the principal axis of their scatter, at half the angle of ``(sxx - syy, 2 sxy)`` (in
     [-pi/2, pi/2], so x >= 0; (1, 0) when the points coincide)."""
     centre = points.sum(axis=0) / len(points)  # the mean, without its overhead
-    (sxx, sxy), (_, syy) = (points - centre).T @ (points - centre)
+    centred = points - centre
+    (sxx, sxy), (_, syy) = centred.T @ centred
     angle = 0.5 * math.atan2(2.0 * sxy, sxx - syy)
     return centre, np.array([math.cos(angle), math.sin(angle)])
 
