@@ -47,6 +47,7 @@ noise and dropouts); the same seeds serve the three goalie positions. Reported f
 seeds 100-109 (the default; nothing was tuned, seeds 0-1 served to debug the script)::
 
     python benchmarks/penalty_shootout.py                      # ~5 min on 2 cores
+    python benchmarks/penalty_shootout.py --self-pose field_features   # ~2 min
     python benchmarks/penalty_shootout.py --self-pose oracle   # the ablations below
     python benchmarks/penalty_shootout.py --self-pose truth
     python benchmarks/penalty_shootout.py --runs 3 --seeds 0-9 --out /tmp/shootout
@@ -54,7 +55,11 @@ seeds 100-109 (the default; nothing was tuned, seeds 0-1 served to debug the scr
 Writes ``penalty_shootout.json`` (per run and per position: medians and ranges),
 ``penalty_shootout.md`` (seed 004's Table 5 layout, the seed's numbers beside ours) and
 ``penalty_shootout_error.png`` (the confirmed track's position error over time, per run) to
-``--out`` (``benchmarks/results``). ``--self-pose oracle`` (files ``penalty_shootout_oracle*``)
+``--out`` (``benchmarks/results``). ``--self-pose field_features`` (files
+``penalty_shootout_field_features*``) localises the striker from the field's lines, junctions
+and posts in the same image (:class:`perception.providers.field.FieldFeaturePose`, the
+NoPoles envs' self pose): facing the goal it sees the penalty area's lines, where SLAM sees no
+pole. ``--self-pose oracle`` (files ``penalty_shootout_oracle*``)
 replaces SLAM by the oracle self pose (the true pose with fresh white noise each frame,
 ``OracleConfig``: 5 cm, 0.02 rad): a well-localised striker, as seed 004's was on a field it
 knew, to separate the detection and tracking error from dead reckoning's. ``--self-pose truth``
@@ -653,9 +658,10 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=RESULTS, help="output folder")
     parser.add_argument(
         "--self-pose",
-        choices=("ekf_slam", "oracle", "truth"),
+        choices=("ekf_slam", "field_features", "oracle", "truth"),
         default="ekf_slam",
-        help="the striker's self pose: the default EKF SLAM, or the oracle ablation (the true "
+        help="the striker's self pose: the default EKF SLAM, the field-feature pose filter "
+        "(lines, junctions, posts from the same image), or the oracle ablation (the true "
         "pose with white noise, OracleConfig's 5 cm / 0.02 rad) or the true pose (the oracle "
         "with 1 nm / 1 nrad noise); outputs named penalty_shootout_<self pose>*",
     )
@@ -665,7 +671,7 @@ def main() -> None:
     perception = replace(
         PipelineConfig(),
         robot_sightings="vision",
-        self_pose="ekf_slam" if args.self_pose == "ekf_slam" else "oracle",
+        self_pose=args.self_pose if args.self_pose != "truth" else "oracle",
         oracle=oracle if args.self_pose == "truth" else OracleConfig(),
     )
     config = EnvConfig(perception=perception)
