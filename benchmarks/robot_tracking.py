@@ -73,6 +73,7 @@ from seed000_experiments import series_plot
 
 import spl_env  # noqa: F401  (registers the envs)
 from agents.baselines import HeadScan
+from agents.evaluate import parse_overrides
 from perception.geometry import FloatArray
 from perception.representations import ROBOT_TRACKS
 
@@ -466,14 +467,18 @@ def score_step(
     return c, c.gospa
 
 
-def make_env(frontend: str, n_robots: int, episode_s: float) -> gym.Env:
-    """The env: ``frontend`` robot sightings among ``n_robots`` other robots, full info."""
+def make_env(
+    frontend: str, n_robots: int, episode_s: float, overrides: dict[str, Any] | None = None
+) -> gym.Env:
+    """The env: ``frontend`` robot sightings among ``n_robots`` other robots, full info, and
+    the env config ``overrides`` (``--set``)."""
     return gym.make(
         ENV_ID,
         robot_frontend=frontend,
         n_other_robots=n_robots,
         episode_s=episode_s,
         info_level="full",
+        **(overrides or {}),
     )
 
 
@@ -626,8 +631,16 @@ def main() -> None:
     parser.add_argument("--episode-s", type=float, default=60.0, help="episode length (s)")
     parser.add_argument("--head", choices=tuple(HEADS), default="robots")
     parser.add_argument("--torch-threads", type=int, default=1, help="torch intra-op threads")
+    parser.add_argument(
+        "--set",
+        nargs="*",
+        default=[],
+        metavar="KEY=VALUE",
+        help="env config overrides (agents.evaluate's), e.g. self_pose=field_features",
+    )
     parser.add_argument("--out", type=Path, default=RESULTS / "robot_tracking.json")
     args = parser.parse_args()
+    overrides = parse_overrides(args.set)
     torch.set_num_threads(args.torch_threads)
     seeds = parse_seeds(args.seeds) if args.seeds else list(range(100, 100 + args.episodes))
     setting = {
@@ -641,6 +654,7 @@ def main() -> None:
         "match_m": MATCH_M,
         "recent_s": RECENT_S,
         "torch_threads": torch.get_num_threads(),
+        "overrides": overrides,
         **provenance(),
     }
     episodes: list[dict[str, Any]] = []
@@ -649,7 +663,7 @@ def main() -> None:
     started = time.perf_counter()
     for n in args.robots:
         for frontend in args.frontends:
-            env = make_env(frontend, n, args.episode_s)
+            env = make_env(frontend, n, args.episode_s, overrides)
             pooled = Counts()
             failed = []
             for seed in seeds:
@@ -664,7 +678,7 @@ def main() -> None:
                     record["error"] = error
                     failed.append({"seed": seed, "error": error})
                     env.close()
-                    env = make_env(frontend, n, args.episode_s)
+                    env = make_env(frontend, n, args.episode_s, overrides)
                 episodes.append(record)
                 print(json.dumps({k: record[k] for k in list(record)[:8]}), error, flush=True)
             env.close()
