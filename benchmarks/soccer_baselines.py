@@ -25,6 +25,8 @@ comparisons) and ``.md`` to ``--out`` (``benchmarks/results``; ``--name`` defaul
         --players centre_kick goalie_aware runs/striker_s0/model.zip runs/striker_s1/model.zip \
         --group learned=runs/striker_s --paired-with centre_kick --name striker_policies
 
+``--envs`` takes the ``-NoPoles-`` ids too (their pole env's players; the robot localises
+from the field's lines, with no pole on the field).
 ``--set KEY=VALUE`` passes env overrides (``agents.evaluate``'s), e.g.
 ``self_pose=field_features`` to localise from the field's lines instead of the poles.
 ``--group NAME=PREFIX`` pools the players whose spec starts with PREFIX (one recipe's training
@@ -106,7 +108,8 @@ def run(env_id: str, player: str, args: argparse.Namespace) -> dict[str, Any]:
                 relative = np.array([c * dx + s * dy, -s * dx + c * dy])
                 relative_errors.append(float(np.hypot(*(relative - belief["ball_relative"]))))
         goal = info["reward_terms"]["goal"]
-        outcomes.append(int(goal == 0 if env_id == "SPL/Goalie-v0" else goal > 0))
+        keeping = env_id.replace("-NoPoles", "") == "SPL/Goalie-v0"  # a save is no goal
+        outcomes.append(int(goal == 0 if keeping else goal > 0))
         returns.append(episode_return)
     seconds = time.perf_counter() - start
     env.close()
@@ -229,8 +232,14 @@ def main() -> None:
     if args.players is not None and not args.envs:
         parser.error("--players needs --envs")
     torch.set_num_threads(1)
-    if args.players is None:
-        runs = [r for r in RUNS if args.envs is None or r[0] in args.envs]
+    if args.players is None:  # a no-poles id plays its pole env's players
+        envs = [e for e, _ in RUNS] if args.envs is None else args.envs
+        runs = [
+            (env_id, player)
+            for env_id in dict.fromkeys(envs)
+            for base, player in RUNS
+            if base == env_id.replace("-NoPoles", "")
+        ]
     else:
         runs = [(env_id, player) for env_id in args.envs for player in args.players]
     for pair in args.group:

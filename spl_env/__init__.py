@@ -16,6 +16,9 @@ from gymnasium.envs.registration import register, registry
 _NO_POLES = {
     "SPL/ActiveVision-NoPoles-v1": "SPL/ActiveVision-v1",
     "SPL/LookAround-NoPoles-v0": "SPL/LookAround-v0",
+    "SPL/Striker-NoPoles-v0": "SPL/Striker-v0",
+    "SPL/Goalie-NoPoles-v0": "SPL/Goalie-v0",
+    "SPL/PenaltyShootout-NoPoles-v0": "SPL/PenaltyShootout-v0",
 }
 # without poles the robot localises from field features, with the textured posters around
 # the field: natural landmarks on the horizon (seed 004 ch. 3-5) need upright structure
@@ -37,7 +40,8 @@ _ENTRY_POINTS = {
 ENV_IDS: tuple[str, ...] = (*_ENTRY_POINTS, *_NO_POLES)
 SPL_ENV_IDS: tuple[str, ...] = tuple(i for i in ENV_IDS if i.startswith("SPL/"))  # Naos, field
 CIRCLES_ENV_IDS: tuple[str, ...] = tuple(i for i in ENV_IDS if i.startswith("Circles/"))
-SOCCER_ENV_IDS: tuple[str, ...] = ("SPL/Striker-v0", "SPL/Goalie-v0", "SPL/PenaltyShootout-v0")
+_SOCCER = ("SPL/Striker-v0", "SPL/Goalie-v0", "SPL/PenaltyShootout-v0")
+SOCCER_ENV_IDS: tuple[str, ...] = (*_SOCCER, *(i for i, p in _NO_POLES.items() if p in _SOCCER))
 # the SPL ids whose action is the head (active vision), the body walking a scripted path
 HEAD_CONTROL_ENV_IDS: tuple[str, ...] = tuple(i for i in SPL_ENV_IDS if i not in SOCCER_ENV_IDS)
 
@@ -57,6 +61,7 @@ __all__ = [
     "CIRCLES_ENV_IDS",
     "ENV_IDS",
     "HEAD_CONTROL_ENV_IDS",
+    "NO_POLES_KWARGS",
     "SOCCER_ENV_IDS",
     "SPL_ENV_IDS",
 ]
