@@ -29,6 +29,7 @@ import itertools
 import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
@@ -275,22 +276,90 @@ def visible_features(
 ) -> tuple[FieldFeature, ...]:
     """The features of ``field_map`` in view of ``camera`` at ``state`` on a robot at ``pose``
     (3,) (m, m, rad, field frame), in map order; noisy when ``rng`` is given (module
-    docstring), else exact with the same covariances."""
+    docstring), else exact with the same covariances. Every tested ground point of the map is
+    projected at once (:func:`_samples`)."""
     robot = finite_vector(pose, "pose", 3)
     view = _View(robot, camera, state, config)
+    samples = _samples(field_map, config.sample_m)
+    seen = view.sees(samples.points)
     found = []
-    for feature in field_map.features:
+    for feature, part in zip(field_map.features, samples.parts, strict=True):
         if feature.kind in SEGMENT_KINDS:
-            stretch = view.longest_stretch(feature.points)
+            if not seen[part].any():
+                continue
+            stretch = _longest_stretch(samples.points[part], seen[part], config.min_line_m)
             if stretch is not None:
                 found.append(view.feature(feature, stretch, rng))
         elif feature.kind == "centre_circle":
-            circle = view.centre_circle(feature, field_map, rng)
-            if circle is not None:
-                found.append(circle)
-        elif view.sees(feature.points)[0]:
+            if seen[part].mean() < config.min_circle_fraction:
+                continue
+            # its direction when an X junction (where the halfway line crosses it) is in view
+            directed = any(seen[samples.parts[k].start] for k in samples.crossings)
+            if not directed:
+                feature = MapFeature("centre_circle", feature.points, feature.name)
+            found.append(view.feature(feature, feature.points, rng))
+        elif seen[part.start]:
             found.append(view.feature(feature, feature.points, rng))
     return tuple(found)
+
+
+@dataclass(frozen=True, eq=False)
+class _Samples:
+    """The ground points (field frame) :func:`visible_features` tests on one map, stacked:
+    ``points`` (N, 2); ``parts``, per map feature in map order, the slice of ``points`` that
+    is its own (a segment's points every ``sample_m`` from end to end, the centre circle's 180
+    rim points, a point feature's point); ``crossings``, the indices of the map's X
+    junctions."""
+
+    points: FloatArray
+    parts: tuple[slice, ...]
+    crossings: tuple[int, ...]
+
+
+@lru_cache(maxsize=8)
+def _samples(field_map: FieldMap, sample_m: float) -> _Samples:
+    """The :class:`_Samples` of ``field_map`` (kept for the last few maps, by identity, and
+    sample spacings ``sample_m`` (m): the map does not change)."""
+    chunks: list[FloatArray] = []
+    for feature in field_map.features:
+        if feature.kind in SEGMENT_KINDS:
+            a, b = feature.points
+            n = max(2, math.ceil(float(np.linalg.norm(b - a)) / sample_m) + 1)
+            chunks.append(a + np.linspace(0.0, 1.0, n)[:, None] * (b - a))
+        elif feature.kind == "centre_circle":
+            radius = field_map.dims.centre_circle_diameter_m / 2
+            angles = np.linspace(0.0, 2 * math.pi, 180, endpoint=False)
+            rim = radius * np.column_stack([np.cos(angles), np.sin(angles)])
+            chunks.append(feature.points[0] + rim)
+        else:
+            chunks.append(feature.points[:1])
+    ends = np.cumsum([0, *(len(c) for c in chunks)])
+    points = np.concatenate(chunks)
+    points.flags.writeable = False
+    return _Samples(
+        points=points,
+        parts=tuple(slice(int(a), int(b)) for a, b in itertools.pairwise(ends)),
+        crossings=tuple(k for k, f in enumerate(field_map.features) if f.kind == "x_junction"),
+    )
+
+
+def _longest_stretch(
+    samples: FloatArray, seen: NDArray[np.bool_], min_line_m: float
+) -> FloatArray | None:
+    """The ends (2, 2) (field frame) of the longest run of a segment's ``samples`` (N, 2)
+    in view (``seen`` (N,)), the first of equals, or None when it is shorter than
+    ``min_line_m`` (or a single sample)."""
+    step = np.diff(np.concatenate([[0], seen.astype(np.int8), [0]]))
+    starts, stops = np.flatnonzero(step == 1), np.flatnonzero(step == -1)
+    if len(starts) == 0:
+        return None
+    best = int(np.argmax(stops - starts))  # the first of the longest runs
+    if stops[best] - starts[best] < 2:
+        return None
+    ends = samples[[starts[best], stops[best] - 1]]
+    if float(np.linalg.norm(ends[1] - ends[0])) < min_line_m:
+        return None
+    return ends
 
 
 class _View:
@@ -325,40 +394,6 @@ class _View:
                 & (uv[:, 1] <= cam.height - 1 - m)
             )
         return inside & (np.hypot(robot[:, 0], robot[:, 1]) <= self.config.max_range_m)
-
-    def longest_stretch(self, segment: FloatArray) -> FloatArray | None:
-        """The ends (2, 2) (field frame) of the longest stretch of ``segment`` in view, or
-        None when it is shorter than ``min_line_m``."""
-        length = float(np.linalg.norm(segment[1] - segment[0]))
-        n = max(2, math.ceil(length / self.config.sample_m) + 1)
-        t = np.linspace(0.0, 1.0, n)
-        samples = segment[0] + t[:, None] * (segment[1] - segment[0])
-        seen = self.sees(samples)
-        step = np.diff(np.concatenate([[0], seen.astype(np.int8), [0]]))
-        starts, stops = np.flatnonzero(step == 1), np.flatnonzero(step == -1)
-        if len(starts) == 0:
-            return None
-        best = int(np.argmax(stops - starts))  # the first of the longest runs
-        if stops[best] - starts[best] < 2:
-            return None
-        ends = samples[[starts[best], stops[best] - 1]]
-        if float(np.linalg.norm(ends[1] - ends[0])) < self.config.min_line_m:
-            return None
-        return ends
-
-    def centre_circle(
-        self, feature: MapFeature, field_map: FieldMap, rng: np.random.Generator | None
-    ) -> FieldFeature | None:
-        """The centre circle when enough of its rim is in view (module docstring)."""
-        radius = field_map.dims.centre_circle_diameter_m / 2
-        angles = np.linspace(0.0, 2 * math.pi, 180, endpoint=False)
-        rim = feature.points[0] + radius * np.column_stack([np.cos(angles), np.sin(angles)])
-        if self.sees(rim).mean() < self.config.min_circle_fraction:
-            return None
-        crossings = [x.points for x in field_map.of_kind("x_junction")]
-        directed = any(self.sees(points)[0] for points in crossings)
-        seen = feature if directed else MapFeature("centre_circle", feature.points, feature.name)
-        return self.feature(seen, feature.points, rng)
 
     def feature(
         self, feature: MapFeature, points: FloatArray, rng: np.random.Generator | None
