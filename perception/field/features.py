@@ -147,7 +147,9 @@ class FieldFeature:
         """A feature from fields its caller built and knows valid (a detector's own finite
         (P, 2) ``points`` and covariances ``cov`` (P, 2, 2)), stored as construction would
         store them (float64 copies, ``direction`` as a float) without checking them again:
-        the fast path of :mod:`perception.vision.field_features`; other code constructs."""
+        the fast path of :mod:`perception.vision.field_features` and of the features placed
+        from the map (:mod:`perception.field.visibility`, the geometric mode's emulator);
+        other code constructs."""
         feature = object.__new__(cls)
         object.__setattr__(feature, "kind", kind)
         object.__setattr__(feature, "points", np.array(points, dtype=np.float64))

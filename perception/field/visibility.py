@@ -285,8 +285,6 @@ def visible_features(
     found = []
     for feature, part in zip(field_map.features, samples.parts, strict=True):
         if feature.kind in SEGMENT_KINDS:
-            if not seen[part].any():
-                continue
             stretch = _longest_stretch(samples.points[part], seen[part], config.min_line_m)
             if stretch is not None:
                 found.append(view.feature(feature, stretch, rng))
@@ -349,6 +347,8 @@ def _longest_stretch(
     """The ends (2, 2) (field frame) of the longest run of a segment's ``samples`` (N, 2)
     in view (``seen`` (N,)), the first of equals, or None when it is shorter than
     ``min_line_m`` (or a single sample)."""
+    if not seen.any():  # most of the map, from any pose
+        return None
     step = np.diff(np.concatenate([[0], seen.astype(np.int8), [0]]))
     starts, stops = np.flatnonzero(step == 1), np.flatnonzero(step == -1)
     if len(starts) == 0:
@@ -409,7 +409,8 @@ class _View:
                 direction += float(rng.normal(0.0, cfg.direction_std_rad))
         cov = np.einsum("n,ij->nij", std**2, np.eye(2))
         direction_std = math.nan if direction is None else cfg.direction_std_rad
-        return FieldFeature(feature.kind, robot, cov, direction, direction_std)
+        # the map's own feature, placed: valid by construction (a finite point set, std > 0)
+        return FieldFeature.trusted(feature.kind, robot, cov, direction, direction_std)
 
 
 def detected_features(

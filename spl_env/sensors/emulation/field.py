@@ -181,14 +181,16 @@ class GeometricFieldFeatures:
         covs = detector_covariances(
             np.concatenate([p for _, p, _ in found]), self.camera, state, self.detector
         )
+        # finite points (checked above) and the detector's own positive definite covariances:
+        # built as the detector builds its features, unchecked
         out, start = [], 0
         for kind, points, direction in found:
             cov, start = covs[start : start + len(points)], start + len(points)
             if direction is None:
-                out.append(FieldFeature(kind, points, cov))
+                out.append(FieldFeature.trusted(kind, points, cov))
             else:
                 std = model.reported_direction_std_rad[kind]
-                out.append(FieldFeature(kind, points, cov, direction, std))
+                out.append(FieldFeature.trusted(kind, points, cov, direction, std))
         return tuple(out)
 
 
