@@ -10,7 +10,7 @@ Writes ``metrics.json`` (per episode and mean: return, mean SLAM position error,
 odometry-only error, mean pose NEES, landmark error, ``null`` where no landmark was mapped, the
 robot awareness (share of the robots within 3 m tracked within 0.3 m, ``null`` without robot
 tracks), whether the episode ended in a goal for us (``scored``: in the opponent's goal;
-always 0 in ``SPL/Goalie-v0``, ``null`` in envs without goals),
+always 0 in ``SPL/Goalie-v0`` and its ``-NoPoles`` id, ``null`` in envs without goals),
 mean wall-clock milliseconds per step) and ``trajectory.png`` (the first episode: true
 path green, SLAM orange, odometry grey, on the field); with ``--video`` also ``episode.mp4``, the
 first episode's ``env.render()`` frames at the control rate.

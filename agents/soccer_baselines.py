@@ -1,5 +1,6 @@
 """Scripted players for the soccer envs (``SPL/Striker-v0``, ``SPL/PenaltyShootout-v0``,
-``SPL/Goalie-v0``), reading only the observation, with SB3's ``predict`` signature.
+``SPL/Goalie-v0`` and their ``-NoPoles`` ids), reading only the observation, with SB3's
+``predict`` signature.
 
 - :class:`CentreKickStriker`: walk behind the believed ball and kick it at the goal's centre;
 - :class:`GoalieAwareStriker`: the same, aiming at the middle of the wider gap beside the

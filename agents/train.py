@@ -45,9 +45,19 @@ OPTIONS: dict[str, Callable[[gym.Env], OptionsWrapper]] = {
 
 
 def default_config_path(env_id: str) -> Path:
-    """The shipped config for ``env_id``."""
-    name = env_id.replace("/", "_") + ".json"
-    return Path(str(resources.files("agents") / "configs" / name))
+    """The shipped config for ``env_id``: its own, or for a ``-NoPoles`` id without one, its
+    pole env's (the id's registration adds the no-poles settings). ValueError naming the
+    shipped configs when there is none."""
+    configs = Path(str(resources.files("agents") / "configs"))
+    for candidate in dict.fromkeys([env_id, env_id.replace("-NoPoles", "")]):
+        path = configs / (candidate.replace("/", "_") + ".json")
+        if path.exists():
+            return path
+    shipped = sorted(p.name for p in configs.glob("*.json"))
+    raise ValueError(
+        f"no training config is shipped for env {env_id!r} (shipped: {shipped}); "
+        "pass one with --config"
+    )
 
 
 def load_config(path: Path) -> dict[str, Any]:

@@ -43,8 +43,13 @@ benchmarks: with torch's default of one thread per core, the CNN on a loaded two
 50-190 ms a frame instead of 3 ms, and the timing would measure the contention::
 
     python benchmarks/robot_tracking.py --robots 4 8 --frontends vision cnn oracle
+    python benchmarks/robot_tracking.py --robots 4 --frontends vision --set self_pose=field_features
 
-Writes ``benchmarks/results/robot_tracking.json`` (per episode and summary),
+``--set KEY=VALUE`` passes env config overrides (``agents.evaluate``'s), e.g.
+``self_pose=field_features`` to localise from the field's lines instead of the poles.
+
+Writes ``benchmarks/results/robot_tracking.json`` (``robot_tracking_<KEY=VALUE>.json`` with
+``--set``, unless ``--out`` names it; per episode and summary),
 ``robot_tracking.md`` (the table) and ``robot_tracking_gospa.png`` (GOSPA over the first
 seed's episode, per configuration).
 """
@@ -472,14 +477,13 @@ def make_env(
 ) -> gym.Env:
     """The env: ``frontend`` robot sightings among ``n_robots`` other robots, full info, and
     the env config ``overrides`` (``--set``)."""
-    return gym.make(
-        ENV_ID,
-        robot_frontend=frontend,
-        n_other_robots=n_robots,
-        episode_s=episode_s,
-        info_level="full",
-        **(overrides or {}),
-    )
+    settings = {
+        "robot_frontend": frontend,
+        "n_other_robots": n_robots,
+        "episode_s": episode_s,
+        "info_level": "full",
+    }
+    return gym.make(ENV_ID, **{**settings, **(overrides or {})})
 
 
 def run_episode(env: gym.Env, seed: int, head: str) -> tuple[Counts, list[float], str | None]:
@@ -548,11 +552,11 @@ def gospa_figure(series: dict[tuple[str, int], list[float]]) -> np.ndarray:
 
 
 def diagnostics(summary: dict[str, Any]) -> str:
-    """The diagnostic table: error of tracks seen this step and coasting, SLAM error, ID switch
+    """The diagnostic table: error of tracks seen this step and coasting, self-pose error, ID switch
     kinds, track ids started, false-track causes."""
     rows = [
         "| front end | others | error robot frame (m) | error seen now / coasting (m) "
-        "| coasting share | SLAM error (m) "
+        "| coasting share | self-pose error (m) "
         "| ID swaps / re-acquisitions | confirmed ids | false tracks within 3 m by cause |",
         "|" + "---|" * 9,
     ]
@@ -638,9 +642,13 @@ def main() -> None:
         metavar="KEY=VALUE",
         help="env config overrides (agents.evaluate's), e.g. self_pose=field_features",
     )
-    parser.add_argument("--out", type=Path, default=RESULTS / "robot_tracking.json")
+    parser.add_argument(
+        "--out", type=Path, default=None, help="JSON path (robot_tracking[_<overrides>].json)"
+    )
     args = parser.parse_args()
     overrides = parse_overrides(args.set)
+    if args.out is None:
+        args.out = RESULTS / ("_".join(["robot_tracking", *args.set]) + ".json")
     torch.set_num_threads(args.torch_threads)
     seeds = parse_seeds(args.seeds) if args.seeds else list(range(100, 100 + args.episodes))
     setting = {

@@ -122,7 +122,7 @@ def markdown(result: dict[str, Any], self_pose: str) -> str:
         f"Per true circle (4 goal posts, 6 poles) the nearest confirmed mapped circle at the "
         f"episode's end; acceptance: every one within {ACCEPT_M} m.",
         "",
-        "| seed | centre errors (mm) | within 0.05 m | spurious | SLAM error (m) |",
+        "| seed | centre errors (mm) | within 0.05 m | spurious | self-pose error (m) |",
         "|---|---|---|---|---|",
     ]
     for r in result["episodes"]:
@@ -138,9 +138,9 @@ def markdown(result: dict[str, Any], self_pose: str) -> str:
         f"{1e3 * s['centre_error_max_m']:.0f}), radius error median "
         f"{1e3 * s['radius_error_median_m']:.0f} mm; {100 * s['share_within_accept']:.0f} % of "
         f"the circles within {ACCEPT_M} m, all of them in {s['episodes_all_within_accept']} of "
-        f"{s['episodes']} episodes; {s['spurious_mean']:.1f} spurious circles per episode; SLAM "
-        f"error {s['slam_error_mean_m']:.3f} m; perception {s['perception_ms_per_step']:.1f} ms "
-        "per step.",
+        f"{s['episodes']} episodes; {s['spurious_mean']:.1f} spurious circles per episode; "
+        f"self-pose error {s['slam_error_mean_m']:.3f} m; perception "
+        f"{s['perception_ms_per_step']:.1f} ms per step.",
     ]
     return "\n".join(lines) + "\n"
 

@@ -19,6 +19,7 @@ circle has a twin there: field features alone cannot tell the two halves apart.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -48,7 +49,9 @@ class MapFeature:
 
     def __post_init__(self) -> None:
         check_kind(self.kind, "MapFeature")
-        object.__setattr__(self, "points", checked_points(self.points, self.kind, "MapFeature"))
+        points = checked_points(self.points, self.kind, "MapFeature")
+        points.flags.writeable = False  # maps are shared (shared_field_map)
+        object.__setattr__(self, "points", points)
         check_direction(self.kind, self.direction, "MapFeature")
 
 
@@ -82,6 +85,15 @@ class FieldMap:
         """The map's features of ``kind``, in map order."""
         check_kind(kind, "FieldMap.of_kind")
         return tuple(f for f in self.features if f.kind == kind)
+
+
+@functools.cache
+def shared_field_map(dims: FieldDimensions) -> FieldMap:
+    """One :class:`FieldMap` of ``dims`` for every env and player of the process: a map never
+    changes (its features' points are read-only), and what the sensor model and the view test
+    work out from a map once, kept by the map's identity, then serves them all (a team of ten
+    perceiving players, a vector of envs)."""
+    return FieldMap(dims)
 
 
 def _feature(

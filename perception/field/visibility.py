@@ -351,8 +351,6 @@ def _longest_stretch(
         return None
     step = np.diff(np.concatenate([[0], seen.astype(np.int8), [0]]))
     starts, stops = np.flatnonzero(step == 1), np.flatnonzero(step == -1)
-    if len(starts) == 0:
-        return None
     best = int(np.argmax(stops - starts))  # the first of the longest runs
     if stops[best] - starts[best] < 2:
         return None

@@ -7,7 +7,7 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from perception.field.dimensions import FieldDimensions
-from perception.field.field_map import FieldMap
+from perception.field.field_map import FieldMap, shared_field_map
 from perception.representations import Prior
 from perception.types import CameraModel, PoleCode, PoleGeometry
 
@@ -62,14 +62,12 @@ class PerceptionContext:
         self.pole = pole
         self.field = field if field is not None else FieldDimensions()
         self._cnn: dict[CnnDetectorConfig, CnnPoleDetector] = {}
-        self._field_map: FieldMap | None = None
 
     @property
     def field_map(self) -> FieldMap:
-        """The map of the field's features (:class:`perception.field.field_map.FieldMap`)."""
-        if self._field_map is None:
-            self._field_map = FieldMap(self.field)
-        return self._field_map
+        """The map of the field's features (:class:`perception.field.field_map.FieldMap`),
+        shared with every context of the same field (:func:`shared_field_map`)."""
+        return shared_field_map(self.field)
 
     def require_camera(self, reader: str) -> CameraModel:
         """The camera's intrinsics for the provider ``reader``; ValueError without a camera."""

@@ -1,9 +1,11 @@
 """``SPL/Striker-v0``, ``SPL/Goalie-v0``, ``SPL/PenaltyShootout-v0``: behaviour on perceived state.
 
-Our robot's body is the action (where to walk, when and where to kick); the head is scripted
-(looks at the believed ball, scans when it is lost) or, with ``head_control="action"``, part of
-the action. Every observation key is what perception believes; the scripted opponents and the
-rewards use the truth.
+Each is also registered without poles (``SPL/Striker-NoPoles-v0`` and so on:
+:data:`spl_env.NO_POLES_KWARGS`, the pose from the field's features). Our robot's body is the
+action (where to walk, when and where to kick); the head is scripted (looks at the believed
+ball, scans when it is lost) or, with ``head_control="action"``, part of the action. Every
+observation key is what perception believes; the scripted opponents and the rewards use the
+truth.
 """
 
 from __future__ import annotations

@@ -122,6 +122,13 @@ def _strict_json(path: Path) -> dict:
     return json.loads(path.read_text(), parse_constant=refuse)
 
 
+def test_a_no_poles_id_trains_with_its_pole_envs_config_and_a_missing_one_is_named() -> None:
+    assert default_config_path("SPL/Striker-NoPoles-v0") == default_config_path("SPL/Striker-v0")
+    assert default_config_path("SPL/ActiveVision-NoPoles-v1").name == "SPL_ActiveVision-v1.json"
+    with pytest.raises(ValueError, match="no training config is shipped for env 'SPL/Goalie-v0'"):
+        default_config_path("SPL/Goalie-v0")
+
+
 @pytest.fixture(scope="module")
 def trained_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A run directory with ``model.zip`` and ``config.json`` after 2048 PPO steps (~60 s)."""

@@ -1,5 +1,6 @@
-"""The soccer envs (SPL/Striker-v0, SPL/Goalie-v0, SPL/PenaltyShootout-v0): the kick, goals and
-the ball out, the action mapping, the scripted skills and players, against known geometry."""
+"""The soccer envs (SPL/Striker-v0, SPL/Goalie-v0, SPL/PenaltyShootout-v0; the checkers also
+their -NoPoles ids): the kick, goals and the ball out, the action mapping, the scripted skills
+and players, against known geometry."""
 
 from __future__ import annotations
 

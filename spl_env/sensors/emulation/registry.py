@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 
-from perception.field.field_map import FieldMap
+from perception.field.field_map import shared_field_map
 from perception.pipeline import PipelineConfig
 from perception.representations import (
     BALL_SIGHTINGS,
@@ -80,7 +80,7 @@ def _field_features(bottom: bool) -> EmulatorFactory:
     def build(
         scene: SplFieldScene, robots: list[NaoRobot], sensors: RigConfig, perception: PipelineConfig
     ) -> GeometricFieldFeatures:
-        field_map = FieldMap(scene.dimensions)
+        field_map = shared_field_map(scene.dimensions)
         model, view = sensors.camera.model, perception.feature_view
         return GeometricFieldFeatures(
             field_map, model, view, bottom=bottom, detector=perception.field_detector
