@@ -19,6 +19,7 @@ import numpy as np
 
 import spl_env  # noqa: F401  (registers the env ids)
 from agents.evaluate import (
+    add_overrides_argument,
     env_kwargs_for,
     episode_metrics,
     load_policy,
@@ -50,13 +51,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--policy", default="scan", help="a baseline name or a model .zip")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--frames", type=int, default=6, help="views in the strip")
-    parser.add_argument(
-        "--set",
-        nargs="*",
-        default=[],
-        metavar="KEY=VALUE",
-        help="env config overrides by dotted path, top-level name or alias, as agents.evaluate",
-    )
+    add_overrides_argument(parser)
     args = parser.parse_args(argv)
     if args.frames < 1:
         parser.error(f"--frames must be >= 1, got {args.frames}")

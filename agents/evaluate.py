@@ -289,6 +289,19 @@ def summarise(per_episode: list[dict[str, float | None]]) -> dict[str, float | N
     return out
 
 
+def add_overrides_argument(parser: argparse.ArgumentParser) -> None:
+    """``--set KEY=VALUE ...`` on ``parser``: env config overrides, read by
+    :func:`parse_overrides`."""
+    parser.add_argument(
+        "--set",
+        nargs="*",
+        default=[],
+        metavar="KEY=VALUE",
+        help="env config overrides by dotted path, top-level name or alias (values as JSON), "
+        "e.g. --set episode_s=30 self_pose=field_features sensors.camera.noise_std=0",
+    )
+
+
 def parse_overrides(pairs: list[str]) -> dict[str, Any]:
     """``key=value`` strings to env kwargs; values are JSON (numbers, strings in quotes, true)."""
     out: dict[str, Any] = {}
@@ -328,14 +341,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--episodes", type=int, default=3)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path, default=Path("outputs/eval"))
-    parser.add_argument(
-        "--set",
-        nargs="*",
-        default=[],
-        metavar="KEY=VALUE",
-        help="env config overrides by dotted path, top-level name or alias, e.g. "
-        "--set episode_s=30 body_behaviour=square sensors.camera.noise_std=0",
-    )
+    add_overrides_argument(parser)
     args = parser.parse_args(argv)
     if args.episodes < 1:
         parser.error(f"--episodes must be >= 1, got {args.episodes}")

@@ -32,7 +32,7 @@ from typing import Any
 import gymnasium as gym
 
 import spl_env  # noqa: F401  (registers the env ids)
-from agents.evaluate import parse_overrides
+from agents.evaluate import add_overrides_argument, parse_overrides
 from agents.head_options import HeadOptions
 from agents.imitation import WarmStartConfig, imitate, record_teacher
 from agents.options import OptionsWrapper
@@ -177,13 +177,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--out", type=Path, default=Path("runs/ppo_active_vision"))
     parser.add_argument("--progress-bar", action="store_true", help="needs the 'train' extra")
     parser.add_argument("--tensorboard", type=Path, default=None, help="log dir; needs tensorboard")
-    parser.add_argument(
-        "--set",
-        nargs="*",
-        default=[],
-        metavar="KEY=VALUE",
-        help="env config overrides by dotted path, top-level name or alias, as agents.evaluate",
-    )
+    add_overrides_argument(parser)
     args = parser.parse_args(argv)
     config = load_config(args.config or default_config_path(args.env))
     config["env_kwargs"] = {**config["env_kwargs"], **parse_overrides(args.set)}

@@ -43,6 +43,7 @@ import numpy as np
 import torch
 
 import spl_env  # noqa: F401  (registers the env ids)
+from agents.evaluate import add_overrides_argument
 from agents.options import OptionsWrapper
 from agents.soccer_baselines import GoalieAwareStriker, wider_gap_middle
 from agents.striker_options import KICK_GEOMETRY, StrikerOptionsConfig, StrikerPrimitives
@@ -268,9 +269,7 @@ def main() -> None:
     parser.add_argument("--mode", choices=("rendered", "geometric"), default="geometric")
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument(
-        "--set", nargs="*", default=[], metavar="KEY=VALUE", help="env config overrides"
-    )
+    add_overrides_argument(parser)
     parser.add_argument(
         "--rows",
         type=Path,

@@ -78,7 +78,7 @@ from seed000_experiments import series_plot
 
 import spl_env  # noqa: F401  (registers the envs)
 from agents.baselines import HeadScan
-from agents.evaluate import parse_overrides
+from agents.evaluate import add_overrides_argument, parse_overrides
 from perception.geometry import FloatArray
 from perception.representations import ROBOT_TRACKS
 
@@ -635,13 +635,7 @@ def main() -> None:
     parser.add_argument("--episode-s", type=float, default=60.0, help="episode length (s)")
     parser.add_argument("--head", choices=tuple(HEADS), default="robots")
     parser.add_argument("--torch-threads", type=int, default=1, help="torch intra-op threads")
-    parser.add_argument(
-        "--set",
-        nargs="*",
-        default=[],
-        metavar="KEY=VALUE",
-        help="env config overrides (agents.evaluate's), e.g. self_pose=field_features",
-    )
+    add_overrides_argument(parser)
     parser.add_argument(
         "--out", type=Path, default=None, help="JSON path (robot_tracking[_<overrides>].json)"
     )

@@ -50,7 +50,7 @@ import torch
 from scipy import stats
 
 import spl_env  # noqa: F401  (registers the env ids)
-from agents.evaluate import load_policy, parse_overrides
+from agents.evaluate import add_overrides_argument, load_policy, parse_overrides
 
 RESULTS = Path("benchmarks/results")
 RUNS = (
@@ -219,13 +219,7 @@ def main() -> None:
         metavar="PLAYER",
         help="also each player's success share minus this one's, paired on the episodes",
     )
-    parser.add_argument(
-        "--set",
-        nargs="*",
-        default=[],
-        metavar="KEY=VALUE",
-        help="env config overrides (agents.evaluate's), e.g. self_pose=field_features",
-    )
+    add_overrides_argument(parser)
     parser.add_argument("--name", default="soccer_baselines", help="output file stem")
     parser.add_argument("--out", type=Path, default=RESULTS)
     args = parser.parse_args()
