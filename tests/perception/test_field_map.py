@@ -10,7 +10,7 @@ import pytest
 
 from perception.field.dimensions import FieldDimensions
 from perception.field.features import FieldFeature
-from perception.field.field_map import FieldMap
+from perception.field.field_map import FieldMap, shared_field_map
 from perception.geometry import wrap_angle
 
 FIELD = FieldMap()
@@ -30,6 +30,18 @@ def test_the_map_holds_the_2025_fields_features() -> None:
         "goal_post": 4,
     }
     assert len({f.name for f in FIELD.features}) == len(FIELD.features)
+
+
+def test_one_shared_map_per_field_size_with_read_only_points() -> None:
+    """Every env and player of a process gets the same map of a field size (the per-map
+    caches of the sensor model and view test then serve them all), and nobody can move it."""
+    assert shared_field_map(DIMS) is shared_field_map(FieldDimensions())
+    smaller = FieldDimensions(length_m=7.5, width_m=5.0)
+    assert shared_field_map(smaller) is not shared_field_map(DIMS)
+    assert shared_field_map(smaller).dims == smaller
+    points = shared_field_map(DIMS).features[0].points
+    with pytest.raises(ValueError, match="read-only"):
+        points[0, 0] = 1.0
 
 
 def test_every_feature_has_its_half_turn_twin() -> None:
