@@ -31,7 +31,7 @@ from typing import Any
 
 import gymnasium as gym
 
-import spl_env  # noqa: F401  (registers the env ids)
+import spl_env  # registers the env ids
 from agents.evaluate import add_overrides_argument, parse_overrides
 from agents.head_options import HeadOptions
 from agents.imitation import WarmStartConfig, imitate, record_teacher
@@ -49,7 +49,7 @@ def default_config_path(env_id: str) -> Path:
     pole env's (the id's registration adds the no-poles settings). ValueError naming the
     shipped configs when there is none."""
     configs = Path(str(resources.files("agents") / "configs"))
-    for candidate in dict.fromkeys([env_id, env_id.replace("-NoPoles", "")]):
+    for candidate in dict.fromkeys([env_id, spl_env.pole_env_id(env_id)]):
         path = configs / (candidate.replace("/", "_") + ".json")
         if path.exists():
             return path

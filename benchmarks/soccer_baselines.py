@@ -49,7 +49,7 @@ import numpy as np
 import torch
 from scipy import stats
 
-import spl_env  # noqa: F401  (registers the env ids)
+import spl_env  # registers the env ids
 from agents.evaluate import add_overrides_argument, load_policy, parse_overrides
 
 RESULTS = Path("benchmarks/results")
@@ -108,7 +108,7 @@ def run(env_id: str, player: str, args: argparse.Namespace) -> dict[str, Any]:
                 relative = np.array([c * dx + s * dy, -s * dx + c * dy])
                 relative_errors.append(float(np.hypot(*(relative - belief["ball_relative"]))))
         goal = info["reward_terms"]["goal"]
-        keeping = env_id.replace("-NoPoles", "") == "SPL/Goalie-v0"  # a save is no goal
+        keeping = spl_env.pole_env_id(env_id) == "SPL/Goalie-v0"  # a save is no goal
         outcomes.append(int(goal == 0 if keeping else goal > 0))
         returns.append(episode_return)
     seconds = time.perf_counter() - start
@@ -232,7 +232,7 @@ def main() -> None:
             (env_id, player)
             for env_id in dict.fromkeys(envs)
             for base, player in RUNS
-            if base == env_id.replace("-NoPoles", "")
+            if base == spl_env.pole_env_id(env_id)
         ]
     else:
         runs = [(env_id, player) for env_id in args.envs for player in args.players]

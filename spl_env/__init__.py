@@ -40,8 +40,16 @@ _ENTRY_POINTS = {
 ENV_IDS: tuple[str, ...] = (*_ENTRY_POINTS, *_NO_POLES)
 SPL_ENV_IDS: tuple[str, ...] = tuple(i for i in ENV_IDS if i.startswith("SPL/"))  # Naos, field
 CIRCLES_ENV_IDS: tuple[str, ...] = tuple(i for i in ENV_IDS if i.startswith("Circles/"))
+
+
+def pole_env_id(env_id: str) -> str:
+    """The id of the env with poles that ``env_id`` is (a ``-NoPoles`` id's pole env, which
+    the no-poles settings :data:`NO_POLES_KWARGS` were added to), else ``env_id`` itself."""
+    return _NO_POLES.get(env_id, env_id)
+
+
 _SOCCER = ("SPL/Striker-v0", "SPL/Goalie-v0", "SPL/PenaltyShootout-v0")
-SOCCER_ENV_IDS: tuple[str, ...] = (*_SOCCER, *(i for i, p in _NO_POLES.items() if p in _SOCCER))
+SOCCER_ENV_IDS: tuple[str, ...] = tuple(i for i in SPL_ENV_IDS if pole_env_id(i) in _SOCCER)
 # the SPL ids whose action is the head (active vision), the body walking a scripted path
 HEAD_CONTROL_ENV_IDS: tuple[str, ...] = tuple(i for i in SPL_ENV_IDS if i not in SOCCER_ENV_IDS)
 
@@ -64,4 +72,5 @@ __all__ = [
     "NO_POLES_KWARGS",
     "SOCCER_ENV_IDS",
     "SPL_ENV_IDS",
+    "pole_env_id",
 ]

@@ -357,21 +357,6 @@ def test_facing_a_side_board_means_the_optical_axis_meets_it_between_the_end_lin
     assert provider._facing(np.array([x0, 1.0, 0.0]), outside, SIDES) == 0
 
 
-def test_only_features_on_the_faced_sides_boards_are_kept() -> None:
-    provider = NaturalLandmarkFieldEnd(FieldEndProviderConfig(), CONTEXT)
-    field = CONTEXT.field
-    edge = field.half_width_m + field.border_strip_m
-    half_length = field.half_length_m + field.border_strip_m
-    seen = view(AWAY)
-    pose = np.array([3.0, edge - 5.0, math.pi / 2])  # 5 m from the +y edge, facing it
-    on_side = provider._on_boards(seen, pose, 1, SIDES)
-    # a bearing b meets the edge at x = 3 - 5 tan(b): the board spans |x| <= half_length
-    left, right = math.atan2(3.0 + half_length, 5.0), math.atan2(3.0 - half_length, 5.0)
-    np.testing.assert_array_equal(on_side, (seen.bearings <= left) & (seen.bearings >= right))
-    assert on_side.any() and not on_side.all()
-    assert not provider._on_boards(seen, pose, -1, SIDES).any()  # facing +y, nothing on -y's boards
-
-
 @pytest.mark.parametrize("side_boards", [True, False])
 def test_side_board_views_stored_on_the_walk_on_tell_the_sides_apart(side_boards: bool) -> None:
     """Walking on at the centre spot facing +y (one board's words) and -y (another's); in
@@ -435,17 +420,26 @@ def test_features_on_the_faced_goal_are_left_out() -> None:
     assert on_goal.any() and not on_goal.all()
 
 
-def test_only_features_on_the_faced_ends_boards_are_kept() -> None:
+@pytest.mark.parametrize("axis", [ENDS, SIDES])
+def test_only_features_on_the_faced_boards_are_kept(axis: int) -> None:
+    """5 m from the +1 board of ``axis`` (the away end's, the +y side's), facing it, 3 m to
+    the left of the field's middle line across it: the board spans ``extent`` either side of
+    that line, so a bearing b (+ left) meets it where ``3 + 5 tan(b)`` (to the left of that
+    line) lies within ``extent`` of it."""
     provider = NaturalLandmarkFieldEnd(FieldEndProviderConfig(), CONTEXT)
     field = CONTEXT.field
-    edge = field.half_length_m + field.border_strip_m
-    half_width = field.half_width_m + field.border_strip_m
+    half = (field.half_length_m, field.half_width_m)
+    edge = half[axis] + field.border_strip_m
+    extent = half[1 - axis] + field.border_strip_m
     seen = view(AWAY)
-    pose = np.array([edge - 5.0, 3.0, 0.0])  # 5 m from the end, near the left side line
-    on_end = provider._on_boards(seen, pose, AWAY, ENDS)
-    # the end's boards span y in [-half_width, half_width] 5 m ahead, seen from y = 3 m: the
-    # bearings from atan2(-half_width - 3, 5) to atan2(half_width - 3, 5), the corners'
-    left, right = math.atan2(half_width - 3.0, 5.0), math.atan2(-half_width - 3.0, 5.0)
-    np.testing.assert_array_equal(on_end, (seen.bearings <= left) & (seen.bearings >= right))
-    assert on_end.any() and not on_end.all()
-    assert not provider._on_boards(seen, pose, HOME, ENDS).any()  # nothing on home's boards
+    # facing +x, 3 m to the left is y = 3; facing +y, it is x = -3
+    pose = (
+        np.array([edge - 5.0, 3.0, 0.0])
+        if axis == ENDS
+        else np.array([-3.0, edge - 5.0, math.pi / 2])
+    )
+    on_board = provider._on_boards(seen, pose, 1, axis)
+    left, right = math.atan2(extent - 3.0, 5.0), math.atan2(-extent - 3.0, 5.0)
+    np.testing.assert_array_equal(on_board, (seen.bearings <= left) & (seen.bearings >= right))
+    assert on_board.any() and not on_board.all()
+    assert not provider._on_boards(seen, pose, -1, axis).any()  # nothing on the other board

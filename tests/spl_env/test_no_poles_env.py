@@ -151,3 +151,14 @@ def test_a_striker_without_poles_keeps_its_pose_from_the_field_features() -> Non
     assert len(errors) > 50
     assert np.mean(errors) < 0.15 < np.max(drift)
     env.close()
+
+
+def test_each_no_poles_id_names_its_pole_env() -> None:
+    """``pole_env_id`` against the registry: the same entry point, the no-poles settings only
+    on the no-poles id; an id with poles is its own."""
+    for env_id in NO_POLES_IDS:
+        poles = spl_env.pole_env_id(env_id)
+        assert poles != env_id and "NoPoles" not in poles
+        assert gym.spec(env_id).entry_point == gym.spec(poles).entry_point
+        assert gym.spec(env_id).kwargs == NO_POLES_KWARGS and gym.spec(poles).kwargs == {}
+        assert spl_env.pole_env_id(poles) == poles
