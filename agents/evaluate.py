@@ -290,11 +290,12 @@ def summarise(per_episode: list[dict[str, float | None]]) -> dict[str, float | N
 
 
 def add_overrides_argument(parser: argparse.ArgumentParser) -> None:
-    """``--set KEY=VALUE ...`` on ``parser``: env config overrides, read by
-    :func:`parse_overrides`."""
+    """``--set KEY=VALUE ...`` on ``parser`` (several after one ``--set``, or ``--set`` again):
+    env config overrides, read by :func:`parse_overrides`."""
     parser.add_argument(
         "--set",
-        nargs="*",
+        action="extend",
+        nargs="+",
         default=[],
         metavar="KEY=VALUE",
         help="env config overrides by dotted path, top-level name or alias (values as JSON), "

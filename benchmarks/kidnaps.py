@@ -48,7 +48,7 @@ import numpy as np
 import torch
 
 import spl_env  # noqa: F401  (registers the env ids)
-from agents.evaluate import load_policy
+from agents.evaluate import add_overrides_argument, load_policy, parse_overrides
 from perception.landmarks.field_end import AWAY, HOME
 from perception.providers.field import FieldFeaturePose
 from perception.representations import FIELD_END, SELF_POSE
@@ -202,16 +202,9 @@ def main() -> None:
         action="append",
         help="run only these localisation variants (default: all)",
     )
-    parser.add_argument(
-        "--set",
-        type=lambda item: dict([(item.split("=", 1)[0], json.loads(item.split("=", 1)[1]))]),
-        action="append",
-        default=[],
-        metavar="KEY=JSON",
-        help="an env override, e.g. perception.natural_landmarks.recogniser.window=50",
-    )
+    add_overrides_argument(parser)
     args = parser.parse_args()
-    args.set = {key: value for item in args.set for key, value in item.items()}
+    args.set = parse_overrides(args.set)
     torch.set_num_threads(1)
     t0 = time.perf_counter()
     rows: dict[str, Any] = {}

@@ -34,7 +34,14 @@ import numpy as np
 import torch
 
 import spl_env  # noqa: F401  (registers the env ids)
-from agents.evaluate import episode_metrics, load_policy, run_episode, summarise
+from agents.evaluate import (
+    add_overrides_argument,
+    episode_metrics,
+    load_policy,
+    parse_overrides,
+    run_episode,
+    summarise,
+)
 
 ENV_IDS = ("SPL/ActiveVision-v1", "SPL/ActiveVision-NoPoles-v1")
 RESULTS = Path("benchmarks/results")
@@ -67,9 +74,9 @@ def main() -> None:
     parser.add_argument("--episode-s", type=float, default=60.0)
     parser.add_argument("--out", type=Path, default=RESULTS)
     parser.add_argument("--env", action="append", choices=ENV_IDS, help="default: both")
-    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    add_overrides_argument(parser)
     args = parser.parse_args()
-    overrides = dict(_override(item) for item in args.set)
+    overrides = parse_overrides(args.set)
     torch.set_num_threads(1)
     t0 = time.perf_counter()
     rows = []
@@ -108,17 +115,6 @@ def main() -> None:
     (args.out / f"{name}.json").write_text(json.dumps(result, indent=1))
     (args.out / f"{name}.md").write_text(markdown(result))
     print(markdown(result))
-
-
-def _override(item: str) -> tuple[str, Any]:
-    """``KEY=VALUE`` as a ``gym.make`` keyword: the value parsed as JSON, else the string."""
-    key, sep, text = item.partition("=")
-    if not sep or not key:
-        raise SystemExit(f"--set takes KEY=VALUE, got {item!r}")
-    try:
-        return key, json.loads(text)
-    except json.JSONDecodeError:
-        return key, text
 
 
 def markdown(result: dict[str, Any]) -> str:

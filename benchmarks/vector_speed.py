@@ -24,6 +24,7 @@ import numpy as np
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
 import spl_env  # noqa: F401  (registers the env ids)
+from agents.evaluate import add_overrides_argument, parse_overrides
 
 
 def reset_seconds(env_id: str, resets: int, overrides: dict[str, Any]) -> dict[str, float]:
@@ -65,13 +66,6 @@ def vector_steps_per_second(
     return n_envs * (steps - WARMUP_STEPS) / elapsed
 
 
-def _value(text: str) -> Any:
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError:
-        return text
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
@@ -79,14 +73,14 @@ def main() -> None:
     parser.add_argument("--env", default="SPL/ActiveVision-v0")
     parser.add_argument("--steps", type=int, default=1000, help="vector steps, warm-up included")
     parser.add_argument("--resets", type=int, default=5)
-    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    add_overrides_argument(parser)
     parser.add_argument("--out", type=Path, default=Path("benchmarks/results/vector_speed.json"))
     args = parser.parse_args()
     if args.steps <= WARMUP_STEPS:
         parser.error(f"--steps must exceed the {WARMUP_STEPS} warm-up steps, got {args.steps}")
     if args.resets < 1:
         parser.error(f"--resets must be >= 1, got {args.resets}")
-    extra = {k: _value(v) for k, v in (item.split("=", 1) for item in args.set)}
+    extra = parse_overrides(args.set)
     geometric = {"camera_mode": "geometric", "frontend": "colour", **extra}
     runs = {
         kind_n: vector_steps_per_second(args.env, kind_n[0], kind_n[1], args.steps, geometric)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
 import shutil
@@ -17,6 +18,7 @@ from agents.baselines import BASELINES, FixedHead, HeadScan, LookAtStalest
 from agents.demo import main as demo_main
 from agents.evaluate import (
     EpisodeRecord,
+    add_overrides_argument,
     env_kwargs_for,
     episode_metrics,
     load_policy,
@@ -111,6 +113,22 @@ def test_fixed_head_and_override_parsing() -> None:
         "episode_s": 3,
         "body_behaviour": "square",
     }
+
+
+@pytest.mark.parametrize(
+    "words",
+    [
+        ["--set", "episode_s=3", "body_behaviour=square"],
+        ["--set", "episode_s=3", "--set", "body_behaviour=square"],
+    ],
+)
+def test_set_takes_pairs_after_one_flag_or_the_flag_again(words: list[str]) -> None:
+    parser = argparse.ArgumentParser()
+    add_overrides_argument(parser)
+    parser.add_argument("--out")
+    args = parser.parse_args([*words, "--out", "x"])
+    assert parse_overrides(args.set) == {"episode_s": 3, "body_behaviour": "square"}
+    assert parser.parse_args([]).set == []
 
 
 def _strict_json(path: Path) -> dict:
