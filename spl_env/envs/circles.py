@@ -90,6 +90,12 @@ class CirclesConfig(CoreConfig):
                 f"CirclesConfig.scan_bins must divide the laser's {self.sensors.laser.n_beams} "
                 f"beams, got {self.scan_bins}"
             )
+        if self.perception.self_pose == "circle_slam" and self.sensors.laser.range_noise_std_m <= 0:
+            raise ValueError(
+                "CirclesConfig.sensors.laser.range_noise_std_m must be > 0 with "
+                "perception.self_pose='circle_slam' (its scan update weighs ranges by it), got "
+                f"{self.sensors.laser.range_noise_std_m}"
+            )
 
 
 @dataclass(frozen=True, kw_only=True)

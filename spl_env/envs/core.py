@@ -39,6 +39,7 @@ from perception.representations import (
 )
 from perception.types import SensorFrame
 from spl_env.config import SPL_ALIASES, CoreConfig, EnvConfig
+from spl_env.envs.actions import checked_action
 from spl_env.envs.info import (
     FULL_INFO_REQUIRES,
     InfoLayout,
@@ -245,19 +246,9 @@ class RobotEnv(gym.Env[dict[str, Any], np.ndarray], Generic[StateT]):
 
     # ----- the loop's pieces --------------------------------------------------------------
     def _checked_action(self, action: np.ndarray) -> FloatArray:
-        """``action`` as float64, or ValueError: wrong shape, not finite, outside the space."""
+        """``action`` as float64 within the action space (:func:`checked_action`)."""
         space = self._action_box
-        a = np.asarray(action, dtype=np.float64)
-        if a.shape != space.shape:
-            raise ValueError(f"action must have shape {space.shape}, got {a.shape}")
-        if not np.all(np.isfinite(a)):
-            raise ValueError(f"action must be finite, got {a.tolist()}")
-        low, high = space.low, space.high
-        if np.any(a < low - 1e-6) or np.any(a > high + 1e-6):
-            raise ValueError(
-                f"action must lie in [{low.min():g}, {high.max():g}], got {a.tolist()}"
-            )
-        return a
+        return checked_action(action, space.low.astype(np.float64), space.high.astype(np.float64))
 
     def _sense(self, physics_s: float) -> dict[str, float]:
         """Our robot's frame and perception of it; returns the step's timings (s)."""

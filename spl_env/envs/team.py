@@ -28,6 +28,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -47,6 +48,7 @@ from perception.representations import (
 )
 from perception.types import SensorFrame, SlamEstimate
 from perception.validation import check_int, check_positive
+from spl_env.envs.actions import checked_action
 from spl_env.envs.core import (
     check_camera_mode,
     field_world_state,
@@ -508,24 +510,22 @@ class TeamEnv(ParallelEnv[str, dict[str, np.ndarray], np.ndarray]):
         raise RuntimeError("could not place a player: the half is too crowded")
 
     def _checked_actions(self, actions: dict[str, np.ndarray]) -> list[FloatArray]:
-        """Every player's action as float64, in agent order; ValueError naming the agent for a
-        missing, unknown, misshapen, non-finite or out-of-range one."""
+        """Every player's action as float64, in agent order (:func:`checked_action`); TypeError
+        for ``actions`` that are not a dict, ValueError naming the agent for a missing or
+        unknown one."""
+        if not isinstance(actions, Mapping):
+            raise TypeError(
+                f"actions must be a dict of agent name to action, got {type(actions).__name__}"
+            )
         unknown = sorted(set(actions) - set(self.agents))
         if unknown:
             raise ValueError(f"actions for agents not in the episode: {unknown}")
-        shape = (self._action_size,)
+        high = np.ones(self._action_size)
         checked = []
         for name in self.possible_agents:
             if name not in actions:
                 raise ValueError(f"no action for agent {name!r}")
-            a = np.asarray(actions[name], dtype=np.float64)
-            if a.shape != shape:
-                raise ValueError(f"action of {name!r} must have shape {shape}, got {a.shape}")
-            if not np.all(np.isfinite(a)):
-                raise ValueError(f"action of {name!r} must be finite, got {a.tolist()}")
-            if np.any(np.abs(a) > 1.0 + 1e-6):
-                raise ValueError(f"action of {name!r} must lie in [-1, 1], got {a.tolist()}")
-            checked.append(a)
+            checked.append(checked_action(actions[name], -high, high, f"action of {name!r}"))
         return checked
 
     def _act(self, actions: list[FloatArray], state: WorldState) -> None:

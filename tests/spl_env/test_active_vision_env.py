@@ -223,6 +223,31 @@ def test_bad_actions_raise(env: gym.Env, action: np.ndarray, match: str) -> None
         env.step(action)
 
 
+GEOMETRIC = {"camera_mode": "geometric", "frontend": "colour", **FAST}
+
+
+def test_actions_of_other_than_real_numbers_raise_type_errors() -> None:
+    env = gym.make(ENV_IDS[0], **GEOMETRIC)
+    env.reset(seed=0)
+    for action in ("ab", {"yaw": 0.0}, ["0", "0"], np.ones(2, bool), np.zeros(2) + 1j):
+        with pytest.raises(TypeError, match="action must be an array of real numbers"):
+            env.step(action)
+    env.close()
+
+
+def test_an_action_a_rounding_error_outside_the_box_acts_as_the_bound() -> None:
+    """Within 1e-6 outside a bound the action is the bound: the same step as on it."""
+    outside, on = (gym.make(ENV_IDS[0], **GEOMETRIC) for _ in range(2))
+    outside.reset(seed=3)
+    on.reset(seed=3)
+    a = outside.step(np.array([1 + 5e-7, -1 - 5e-7]))[0]
+    b = on.step(np.array([1.0, -1.0]))[0]
+    for key in a:
+        np.testing.assert_array_equal(a[key], b[key])
+    outside.close()
+    on.close()
+
+
 def test_step_before_reset_raises() -> None:
     e = gym.make(ENV_IDS[0], **FAST)
     with pytest.raises(gym.error.ResetNeeded):

@@ -71,6 +71,11 @@ def test_bad_actions_are_refused(office: OfficeEnv, bad: np.ndarray) -> None:
         office.step(bad)
 
 
+def test_a_noiseless_laser_is_refused_for_circle_slam_naming_the_field() -> None:
+    with pytest.raises(ValueError, match=r"sensors.laser.range_noise_std_m must be > 0"):
+        OfficeEnv(**{"sensors.laser.range_noise_std_m": 0.0})
+
+
 def test_straight_drive_moves_by_the_wheel_travel(office: OfficeEnv) -> None:
     office.reset(seed=0)
     start = office.world_state.robot_pose.copy()

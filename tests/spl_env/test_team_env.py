@@ -321,6 +321,11 @@ def test_bad_actions_are_refused_naming_the_agent(env: TeamEnv) -> None:
         env.step({**stand(env), "red_0": np.full(5, 1.5)})
     with pytest.raises(ValueError, match="not in the episode"):
         env.step({**stand(env), "green_0": STAND})
+    with pytest.raises(TypeError, match="'blue_0' must be an array of real numbers"):
+        env.step({**stand(env), "blue_0": "abcde"})
+    with pytest.raises(TypeError, match="actions must be a dict of agent name to action, got list"):
+        env.step([STAND] * 4)
+    env.step({**stand(env), "red_0": np.full(5, 1 + 5e-7)})  # a rounding error: the bound
 
 
 @pytest.mark.parametrize(
