@@ -36,11 +36,14 @@ def predict(
     """Linear prediction: ``x`` (n,) -> ``F x``, ``P`` (n, n) -> ``F P F^T + Q`` (symmetrised).
 
     An EKF predicts its mean with the nonlinear motion model instead and keeps only the ``P``.
+    Every argument must be finite, else ValueError naming it; ``P`` and ``Q`` are trusted to be
+    covariances (a definiteness test costs O(n^3)).
     """
     x, P, F, Q = (np.asarray(a, dtype=np.float64) for a in (x, P, F, Q))
     n = _state_size(x, P)
     _require_shape("F", F, (n, n))
     _require_shape("Q", Q, (n, n))
+    _require_finite(x=x, P=P, F=F, Q=Q)
     P_new = F @ P @ F.T + Q
     return F @ x, 0.5 * (P_new + P_new.T)
 
@@ -79,15 +82,17 @@ def joseph_update(
     (m, m): the innovation covariance when already computed (e.g. to gate ``y``), else computed
     here. ``y`` must already be wrapped where it holds angles (:func:`wrapped_residual`).
 
-    ``y`` must be finite and ``S`` a covariance (symmetric positive definite), else ValueError;
-    ``P`` is trusted to be one (only its shape is checked: a definiteness test costs O(n^3)).
+    ``x``, ``y`` and ``H`` must be finite, ``R`` a covariance (symmetric positive
+    semidefinite) and ``S`` one that is positive definite, else ValueError naming them; ``P``
+    is trusted to be one (its shape and finiteness are checked: a definiteness test costs
+    O(n^3)).
     """
     x, P, y, H, R = (np.asarray(a, dtype=np.float64) for a in (x, P, y, H, R))
     _state_size(x, P)
     m, idx = _measurement_size(len(x), H, R, index)
     _require_shape("y", y, (m,))
-    if not np.isfinite(y).all():
-        raise ValueError(f"y must be finite, got {y}")
+    _require_finite(x=x, P=P, y=y, H=H)
+    R = check_covariance(R, "R", m, singular_ok=True)
     S = check_covariance(innovation_covariance(P, H, R, idx) if S is None else S, "S", m)
 
     P_Ht = _times_h_transpose(P, H, idx)
@@ -148,6 +153,13 @@ def _measurement_size(
     if values and (min(values) < 0 or max(values) >= n or len(set(values)) < len(values)):
         raise ValueError(f"index must hold distinct state indices in [0, {n}), got {idx}")
     return m, idx.astype(np.intp, copy=False)
+
+
+def _require_finite(**arrays: FloatArray) -> None:
+    """ValueError naming the first of ``arrays`` that holds a NaN or an infinity."""
+    for name, array in arrays.items():
+        if not np.isfinite(array).all():
+            raise ValueError(f"{name} must be finite, got {array.tolist()}")
 
 
 def _require_shape(name: str, array: FloatArray, shape: tuple[int, ...]) -> None:

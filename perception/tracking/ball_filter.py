@@ -73,9 +73,16 @@ import numpy as np
 from perception.estimation.gating import chi2_threshold, mahalanobis_squared
 from perception.estimation.kalman import joseph_update
 from perception.geometry import FloatArray, rot_z
+from perception.tracking.checked_inputs import checked_self_pose, checked_sightings
 from perception.tracking.robot_tracker import constant_velocity_model, sighting_in_field
 from perception.types import BallEstimate, BallSighting, SlamEstimate
-from perception.validation import check_in_interval, check_positive, check_probability
+from perception.validation import (
+    check_finite,
+    check_in_interval,
+    check_positive,
+    check_probability,
+    finite_vector,
+)
 
 _OWNER = "BallFilterConfig"
 _H = np.hstack([np.eye(2), np.zeros((2, 2))])  # the sightings measure the position
@@ -314,19 +321,26 @@ class BallFilter:
         (2,) m/s, robot frame, zero or None for none); fuse this frame's ``sightings`` (robot
         frame); lose a ball whose belief grew too uncertain, or lay ``in_view`` (whether a
         robot-frame point (2,) shows in this frame's image; None: not known) unseen too often
-        (module doc). Returns the estimate placed on the field from ``self_pose``."""
-        if not math.isfinite(time_s):
-            raise ValueError(f"time_s must be finite, got {time_s}")
+        (module doc). Returns the estimate placed on the field from ``self_pose``.
+
+        Every argument is checked before the filter changes; bad ones raise ValueError or
+        TypeError naming them."""
+        check_finite("", "time_s", time_s)
         if self._time_s is not None and time_s < self._time_s:
             raise ValueError(f"time_s must not go back: {time_s} after {self._time_s}")
-        odometry = np.asarray(odometry, dtype=np.float64)
-        if odometry.shape != (3,) or not np.isfinite(odometry).all():
-            raise ValueError(f"odometry must be 3 finite numbers, got {odometry!r}")
+        odometry = finite_vector(odometry, "odometry", 3)
+        checked = checked_sightings(sightings, BallSighting)
+        checked_self_pose(self_pose)
+        kick = (
+            np.zeros(2)
+            if kick_velocity is None
+            else finite_vector(kick_velocity, "kick_velocity", 2)
+        )
         dt = 0.0 if self._time_s is None else time_s - self._time_s
         confirmed = self._last_seen_s == self._time_s  # the last frame fused a sighting
         before = (self._state, self._cov)
-        if self._known and kick_velocity is not None and np.any(kick_velocity):
-            before = self._kicked_by_us(np.asarray(kick_velocity, dtype=np.float64))
+        if self._known and np.any(kick):
+            before = self._kicked_by_us(kick)
         if self._known:
             self._state, self._cov = self._predicted(*before, dt, odometry)
             if self._unkicked is not None:
@@ -335,8 +349,8 @@ class BallFilter:
                 self._candidate = self._moved_point(self._candidate, odometry)
         self._time_s = time_s
         measurements = [
-            sighting_in_field(_ORIGIN, _NO_POSE_COV, s.range_m, s.bearing_rad, s.cov)
-            for s in sightings
+            sighting_in_field(_ORIGIN, _NO_POSE_COV, range_m, bearing, cov)
+            for range_m, bearing, cov in checked
         ]
         if measurements:
             self._fuse(measurements, time_s, before, dt, odometry, confirmed)

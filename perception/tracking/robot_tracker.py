@@ -37,7 +37,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import TypeAlias
+from typing import TypeAlias, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -50,14 +50,13 @@ from perception.estimation.association import (
 from perception.estimation.gating import chi2_threshold
 from perception.estimation.kalman import joseph_update, predict
 from perception.geometry import FloatArray
+from perception.tracking.checked_inputs import checked_self_pose, checked_sightings
 from perception.types import RobotSighting, RobotTrack, SlamEstimate
 from perception.validation import (
-    check_covariance,
     check_finite,
     check_int,
     check_positive,
     check_probability,
-    finite_vector,
 )
 
 _H = np.hstack([np.eye(2), np.zeros((2, 2))])  # H (2, 4): the position part of x
@@ -258,7 +257,7 @@ class RobotTracker:
         if self._time_s is not None and t < self._time_s:
             raise ValueError(f"time_s must not go backwards: got {time_s!r} after {self._time_s!r}")
         checked = _checked_sightings(sightings)
-        pose, pose_cov = _checked_pose(self_pose)
+        pose, pose_cov = checked_self_pose(self_pose)
 
         config = self._config
         if self._time_s is not None and t > self._time_s:
@@ -343,37 +342,10 @@ def _checked_sightings(
     sightings: object,
 ) -> list[tuple[float, float, FloatArray, int | None]]:
     """Check ``sightings``; return each one's ``(range_m, bearing_rad, cov (2, 2), team)``."""
-    if isinstance(sightings, (RobotSighting, str, bytes)) or not isinstance(sightings, Sequence):
-        raise TypeError(
-            f"sightings must be a sequence of RobotSighting, got {type(sightings).__name__}"
-        )
-    checked = []
-    for i, sighting in enumerate(sightings):
-        name = f"sightings[{i}]"
-        if not isinstance(sighting, RobotSighting):
-            raise TypeError(f"{name} must be a RobotSighting, got {type(sighting).__name__}")
-        check_positive(name, "range_m", sighting.range_m)
-        check_finite(name, "bearing_rad", sighting.bearing_rad)
-        cov = check_covariance(sighting.cov, f"{name}.cov", 2)
-        check_int(name, "team", sighting.team, 0, optional=True)
+    checked = checked_sightings(sightings, RobotSighting)
+    out = []
+    for i, sighting in enumerate(cast(Sequence[RobotSighting], sightings)):
+        check_int(f"sightings[{i}]", "team", sighting.team, 0, optional=True)
         team = None if sighting.team is None else int(sighting.team)
-        checked.append((float(sighting.range_m), float(sighting.bearing_rad), cov, team))
-    return checked
-
-
-def _checked_pose(self_pose: object) -> tuple[FloatArray, FloatArray]:
-    """Check ``self_pose``; return its pose (3,) and symmetrised PSD covariance (3, 3)."""
-    if isinstance(self_pose, SlamEstimate):
-        values, names = (
-            (self_pose.pose, self_pose.pose_cov),
-            ("self_pose.pose", "self_pose.pose_cov"),
-        )
-    elif isinstance(self_pose, (tuple, list)) and len(self_pose) == 2:
-        values, names = (self_pose[0], self_pose[1]), ("self_pose[0]", "self_pose[1]")
-    else:
-        raise TypeError(
-            "self_pose must be a SlamEstimate or a (pose (3,), pose_cov (3, 3)) pair, "
-            f"got {type(self_pose).__name__}"
-        )
-    pose = finite_vector(values[0], names[0], 3)
-    return pose, check_covariance(values[1], names[1], 3, singular_ok=True)
+        out.append((*checked[i], team))
+    return out

@@ -850,6 +850,50 @@ def test_time_must_be_finite_and_must_not_go_back_and_odometry_be_three_numbers(
         BallFilter().update(math.nan, [], STILL, pose)
 
 
+@pytest.mark.parametrize(
+    ("kwargs", "error", "match"),
+    [
+        ({"sightings": [sighting(math.nan, 0.1)]}, ValueError, r"sightings\[0\]\.range_m"),
+        ({"sightings": [sighting(-1.0, 0.1)]}, ValueError, r"sightings\[0\]\.range_m"),
+        ({"sightings": [sighting(2.0, math.inf)]}, ValueError, r"sightings\[0\]\.bearing_rad"),
+        (
+            {"sightings": [sighting(2.0, 0.1, [[0.01, 0.009], [-0.009, 0.001]])]},
+            ValueError,
+            r"sightings\[0\]\.cov must be symmetric",
+        ),
+        ({"sightings": [sighting(2.0, 0.1, np.zeros((2, 2)))]}, ValueError, "positive definite"),
+        ({"sightings": [sighting(2.0, 0.1, np.eye(3))]}, ValueError, r"\(2, 2\)"),
+        ({"sightings": [None]}, TypeError, r"sightings\[0\] must be a BallSighting"),
+        ({"sightings": sighting(2.0, 0.1)}, TypeError, "sequence of BallSighting"),
+        ({"kick_velocity": np.array([math.nan, 0.0])}, ValueError, "kick_velocity"),
+        ({"kick_velocity": np.zeros(3)}, ValueError, "kick_velocity"),
+        ({"self_pose": self_pose([math.nan, 0, 0])}, ValueError, "self_pose.pose"),
+        ({"self_pose": self_pose([0, 0, 0], -np.eye(3))}, ValueError, "self_pose.pose_cov"),
+    ],
+)
+def test_bad_arguments_raise_naming_them_and_leave_the_filter_as_it_was(
+    kwargs: dict[str, object], error: type[Exception], match: str
+) -> None:
+    """A refused update changes nothing: the same update made right afterwards gives what it
+    gives on a filter that never saw the bad one (the odometry is not applied twice)."""
+    pose = self_pose([0, 0, 0])
+    moved = np.array([0.5, 0.0, 0.0])
+
+    def started() -> BallFilter:
+        ball_filter = BallFilter()
+        ball_filter.update(0.0, [sighting(0.12, 0.0)], STILL, pose)  # within kick reach
+        return ball_filter
+
+    ball_filter = started()
+    args = {"sightings": [sighting(2.0, 0.1)], "self_pose": pose, **kwargs}
+    with pytest.raises(error, match=match):
+        ball_filter.update(0.1, odometry=moved, **args)  # type: ignore[arg-type]
+    after = ball_filter.update(0.1, [], moved, pose)
+    clean = started().update(0.1, [], moved, pose)
+    np.testing.assert_array_equal(after.relative, clean.relative)
+    np.testing.assert_array_equal(after.relative_cov, clean.relative_cov)
+
+
 def test_reset_forgets_the_ball_the_time_and_the_candidate() -> None:
     pose = [0.0, 0.0, 0.0]
     ball_filter, t = steady_filter(pose, [2.0, 0.0])
