@@ -140,6 +140,14 @@ def test_the_inputs_are_not_modified() -> None:
         np.testing.assert_array_equal(a, b)
 
 
+@pytest.mark.parametrize("name", ["x", "P", "F", "Q"])
+def test_predict_refuses_a_nan_naming_the_argument(name: str) -> None:
+    args = {"x": np.zeros(2), "P": np.eye(2), "F": np.eye(2), "Q": np.eye(2)}
+    args[name] = np.full_like(args[name], np.nan)
+    with pytest.raises(ValueError, match=f"{name} must be finite"):
+        predict(**args)
+
+
 def test_wrapped_residual_wraps_only_the_angles() -> None:
     z = np.array([1.0, math.pi - 0.1])
     z_hat = np.array([0.5, -math.pi + 0.1])
@@ -169,6 +177,11 @@ def test_wrapped_residual_wraps_only_the_angles() -> None:
         ({"H": np.ones((2, 2)), "index": [-1, 1]}, r"index must hold distinct state indices"),
         ({"H": np.ones((2, 2)), "index": [0, 1, 2]}, "index must be 2 ints"),
         ({"H": np.ones((2, 2)), "index": [0.0, 1.0]}, "index must be 2 ints"),
+        ({"x": [np.nan, 0.0, 0.0, 0.0]}, "x must be finite"),
+        ({"P": np.full((4, 4), np.inf)}, "P must be finite"),
+        ({"H": np.full((2, 4), np.nan)}, "H must be finite"),
+        ({"R": -0.1 * np.eye(2)}, "R must be positive semidefinite"),
+        ({"R": [[1.0, 0.5], [0.0, 1.0]]}, "R must be symmetric"),
     ],
 )
 def test_bad_update_input_raises_naming_the_argument(kwargs: dict[str, object], match: str) -> None:
