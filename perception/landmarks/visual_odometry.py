@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 from perception.geometry import FloatArray, wrap_scalar
 from perception.landmarks.horizon_features import HorizonFeatures
 from perception.landmarks.matching import MatchingConfig, match_features
-from perception.validation import check_int, check_positive
+from perception.validation import check_finite, check_int, check_positive
 
 # (earlier frame, later frame) -> index pairs (M, 2): column 0 into the earlier frame's
 # features, column 1 into the later one's
@@ -109,8 +109,11 @@ class ShiftModes:
 
 
 def shift_modes(shifts: FloatArray, config: VisualOdometryConfig) -> ShiftModes:
-    """The modes of ``shifts`` (M,) (rad), the bearing changes of a frame pair's matches."""
+    """The modes of ``shifts`` (M,) (rad), the bearing changes of a frame pair's matches;
+    ValueError unless they are finite and 1-D."""
     shifts = np.asarray(shifts, dtype=np.float64)
+    if shifts.ndim != 1 or not np.isfinite(shifts).all():
+        raise ValueError(f"shifts must be a finite (M,) array, got {shifts.tolist()}")
     if shifts.size == 0:
         return ShiftModes(turn=math.nan, first=0, second=0)
     bins = np.floor(shifts / config.bin_rad).astype(np.int64)
@@ -210,7 +213,10 @@ class CollisionDetector:
 
     def update(self, visual_delta_rad: float, walk_delta_rad: float) -> int:
         """Fold in one frame's heading changes (rad); 1 when the body turns left of the walk
-        (the average is above the bound), -1 right (below minus the bound), else 0."""
+        (the average is above the bound), -1 right (below minus the bound), else 0.
+        ValueError, before the average changes, unless both are finite."""
+        check_finite("", "visual_delta_rad", visual_delta_rad)
+        check_finite("", "walk_delta_rad", walk_delta_rad)
         a = self.config.collision_smoothing
         self.average = (1 - a) * self.average + a * wrap_scalar(visual_delta_rad - walk_delta_rad)
         bound = self.config.collision_bound_rad

@@ -174,9 +174,15 @@ def cluster_ranges(
     ``ranges`` (N,) finite distances (m; no NaN). Clusters merge bottom up while the
     ``method`` linkage (one of :data:`LINKAGES`, as ``scipy.cluster.hierarchy.linkage``) puts
     them within ``cutoff_m`` (inclusive, to 1 nm) of each other. Returns the clusters' mean
-    distances (K,) (m), ascending, and their sizes (K,) (int64, summing to N).
+    distances (K,) (m), ascending, and their sizes (K,) (int64, summing to N). Bad arguments
+    raise ValueError naming them.
     """
-    x = np.sort(np.asarray(ranges, dtype=np.float64).ravel())
+    x = np.asarray(ranges, dtype=np.float64)
+    if x.ndim != 1 or not np.isfinite(x).all():
+        raise ValueError(f"ranges must be a finite (N,) array, got {x.tolist()}")
+    check_positive("", "cutoff_m", cutoff_m, allow_zero=True)
+    check_choice("", "method", method, LINKAGES)
+    x = np.sort(x)
     if len(x) < 2:
         return x, np.ones(len(x), dtype=np.int64)
     Z = linkage(x[:, None], method=method, metric="euclidean")

@@ -5,6 +5,7 @@ plain geometry of a sonar mounted ahead of the robot origin."""
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -114,6 +115,21 @@ def test_cluster_ranges_of_none_and_one():
     assert means.shape == (0,) and counts.shape == (0,)
     means, counts = cluster_ranges([0.7])
     assert means.tolist() == [0.7] and counts.tolist() == [1]
+
+
+@pytest.mark.parametrize(
+    ("args", "match"),
+    [
+        ({"ranges": [1.0, math.nan]}, r"ranges must be a finite \(N,\) array"),
+        ({"ranges": [[1.0, 1.1]]}, r"ranges must be a finite \(N,\) array"),
+        ({"ranges": [1.0, 1.1], "cutoff_m": -1.0}, "cutoff_m"),
+        ({"ranges": [1.0, 1.1], "cutoff_m": math.nan}, "cutoff_m"),
+        ({"ranges": [1.0, 1.1], "method": "ward"}, "method"),
+    ],
+)
+def test_cluster_ranges_refuses_bad_arguments_naming_them(args: dict[str, Any], match: str) -> None:
+    with pytest.raises(ValueError, match=match):
+        cluster_ranges(**args)
 
 
 def _gap_split(x, cutoff):

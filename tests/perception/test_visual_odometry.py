@@ -164,3 +164,19 @@ def test_a_turn_the_walk_cannot_have_made_falls_back_to_the_walk() -> None:
     assert not step.visual and step.delta_rad == 0.0
     small = odometry.update(view(azimuths, jump + 0.02), walk_delta_rad=0.0)
     assert small.visual and small.delta_rad == pytest.approx(0.02, abs=1e-12)
+
+
+def test_a_nan_heading_change_is_refused_before_the_collision_average_changes() -> None:
+    detector = CollisionDetector(CONFIG)
+    detector.update(0.01, 0.0)
+    before = detector.average
+    for visual, walk in ((math.nan, 0.0), (0.0, math.inf)):
+        with pytest.raises(ValueError, match="delta_rad must be finite"):
+            detector.update(visual, walk)
+    assert detector.average == before
+
+
+@pytest.mark.parametrize("shifts", [[0.1, math.nan], [[0.1, 0.2]]])
+def test_shift_modes_refuses_shifts_that_are_not_a_finite_vector(shifts: list[object]) -> None:
+    with pytest.raises(ValueError, match=r"shifts must be a finite \(M,\) array"):
+        shift_modes(np.array(shifts), CONFIG)
