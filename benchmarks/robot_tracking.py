@@ -637,12 +637,16 @@ def main() -> None:
     parser.add_argument("--torch-threads", type=int, default=1, help="torch intra-op threads")
     add_overrides_argument(parser)
     parser.add_argument(
-        "--out", type=Path, default=None, help="JSON path (robot_tracking[_<overrides>].json)"
+        "--out",
+        type=Path,
+        default=None,
+        help="JSON path (robot_tracking[_<head other than robots>][_<overrides>].json)",
     )
     args = parser.parse_args()
     overrides = parse_overrides(args.set)
     if args.out is None:
-        args.out = RESULTS / ("_".join(["robot_tracking", *args.set]) + ".json")
+        head = [] if args.head == "robots" else [args.head]
+        args.out = RESULTS / ("_".join(["robot_tracking", *head, *args.set]) + ".json")
     torch.set_num_threads(args.torch_threads)
     seeds = parse_seeds(args.seeds) if args.seeds else list(range(100, 100 + args.episodes))
     setting = {
