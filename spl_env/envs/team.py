@@ -373,6 +373,8 @@ class TeamEnv(ParallelEnv[str, dict[str, np.ndarray], np.ndarray]):
         the last seeded, or a fresh one). ``options`` are accepted and ignored."""
         if self._closed:
             raise RuntimeError("the env is closed")
+        if seed is not None:
+            check_int("", "seed", seed, 0)
         if seed is not None or self._rng is None:
             self._rng = np.random.default_rng(seed)
         self._episode_rng, *player_rngs = self._rng.spawn(1 + len(self.players))

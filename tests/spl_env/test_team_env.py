@@ -326,6 +326,9 @@ def test_bad_actions_are_refused_naming_the_agent(env: TeamEnv) -> None:
     with pytest.raises(TypeError, match="actions must be a dict of agent name to action, got list"):
         env.step([STAND] * 4)
     env.step({**stand(env), "red_0": np.full(5, 1 + 5e-7)})  # a rounding error: the bound
+    for seed, error in ((1.5, TypeError), (True, TypeError), (-1, ValueError)):
+        with pytest.raises(error, match="seed must be an int >= 0"):
+            env.reset(seed=seed)  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize(
