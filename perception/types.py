@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from perception.geometry import FloatArray, camera_rotation
 from perception.sensor_models import LaserModel, SonarModel
+from perception.validation import check_finite
 
 POLE_COLOURS: tuple[str, ...] = ("pink", "yellow", "blue", "green")
 
@@ -139,6 +140,15 @@ class CameraState:
     head_yaw: float
     head_pitch: float
     tilt: float = 0.0
+
+    def __post_init__(self) -> None:
+        position = np.asarray(self.position, dtype=np.float64)
+        if position.shape != (3,) or not np.isfinite(position).all():
+            raise ValueError(
+                f"CameraState.position must be 3 finite numbers, got {self.position!r}"
+            )
+        for name in ("head_yaw", "head_pitch", "tilt"):
+            check_finite("CameraState", name, getattr(self, name))
 
     def rotation(self) -> FloatArray:
         """(3, 3) camera-to-robot rotation: computed once per state (a frame's detectors ask
