@@ -417,13 +417,19 @@ def post_feet(
     A column counts where a vertical white run ends on ground (within 2 px below it) and
     stands at least ``min_height_m[0]`` tall at the range of its bottom, or
     ``min_height_m[1]`` when the image top cuts it (a lower bound); adjacent such columns
-    with bottoms within half a post's width (at least 3 rows) make one post. Its foot is moved
-    up past rows where the white runs on sideways beyond it (the line it stands on), over no
-    more than ``max_trim_m`` of ground (a board on the white floor beyond the carpet stands on
-    more). A post is kept when its width is within ``width_ratio`` of ``diameter_m`` at that
-    range and the columns half its width beside it are at most ``side_white_max`` white from
-    its foot up to ``min_height_m[1]`` (not a sliver of a wider white thing, nor the legs of a
-    grey robot under its wider body).
+    with bottoms within half a post's width (at least 3 rows) make one candidate. Its extent on
+    each row is the white run through those columns (a post leaning in the image, off its
+    centre in a pitched or rolled camera, has fewer tall columns than it is wide). Its foot is
+    moved up past rows where that run is wider than a post (the line it stands on runs
+    sideways), over no more than ``max_trim_m`` of ground (a board on the white floor beyond
+    the carpet stands on more); the foot pixel is the middle of the run on the foot's row. A
+    candidate is kept when, from its foot up to ``min_height_m[0]`` (under the crossbar), its
+    median run is within ``width_ratio`` of ``diameter_m`` at that range and steady (upper and
+    lower quartile within 2 px or a quarter of it: not a robot's legs, arms and body), and the
+    pixels half its width beyond each run's ends are at most ``side_white_max`` white from its
+    foot up to ``min_height_m[1]`` on either side (not a sliver of a wider white thing).
+    Candidates whose runs share a pixel there are one post (a lean splits its tall columns):
+    the lowest foot is kept.
     """
     height, width = white.shape
     cols, tops, ends = row_runs(transposed(white))
@@ -449,16 +455,22 @@ def post_feet(
             groups[-1].append(k)  # the round foot of a near post curves down to its front
         elif last < 0 or cols[k] != cols[last]:
             groups.append([k])
-    feet = []
+    feet: list[FloatArray] = []
+    spans: list[tuple[int, NDArray[np.intp], NDArray[np.intp]]] = []
     for group in groups:
         c0, c1 = int(cols[group[0]]), int(cols[group[-1]])
-        top, foot = int(tops[group].min()), int(bottoms[group].max())
-        bottom = foot
-        while foot > top and (
-            (c0 >= 2 and white[foot, c0 - 2]) or (c1 + 2 < width and white[foot, c1 + 2])
-        ):
-            foot -= 1
-        pixel = np.array([0.5 * (c0 + c1), foot + 0.5])
+        top, bottom = int(tops[group].min()), int(bottoms[group].max())
+        left, right = _runs_through(white[top : bottom + 1], c0, c1)
+        run_px = right - left + 1  # per row from top to bottom
+        xy, hit = projection.points(np.array([[0.5 * (c0 + c1), bottom + 0.5]]))
+        depth_m = float(projection.depths(xy)[0]) if hit[0] else 0.0
+        if depth_m <= 0:
+            continue
+        widest = width_ratio[1] * projection.fx * diameter_m / depth_m
+        foot = bottom
+        while foot > top and run_px[foot - top] > widest:
+            foot -= 1  # the line the post stands on
+        pixel = np.array([0.5 * (left[foot - top] + right[foot - top]), foot + 0.5])
         xy, hit = projection.points(pixel[None])
         if not hit[0] or bottom - foot > _rows_over(xy[0], max_trim_m, projection) + 2:
             continue  # standing on a white strip wider than a line: the floor, not the carpet
@@ -466,15 +478,63 @@ def post_feet(
         if depth_m <= 0:
             continue
         expected = projection.fx * diameter_m / depth_m
-        if not (width_ratio[0] * expected <= c1 - c0 + 1 <= width_ratio[1] * expected):
+        high = max(int(_row_at(xy[0], min_height_m[0], projection)), top)
+        under_bar = slice(high - top, foot - top + 1)  # the crossbar joins the two posts
+        median_px = float(np.median(run_px[under_bar]))
+        if not (width_ratio[0] * expected <= median_px <= width_ratio[1] * expected):
+            continue
+        lower_q, upper_q = np.percentile(run_px[under_bar], [25, 75])
+        if upper_q - lower_q > max(2.0, 0.25 * median_px):
             continue
         low = max(int(_row_at(xy[0], min_height_m[1], projection)), top)
-        side = 2 + (c1 - c0) // 2  # beyond the lean of a post in a pitched camera
-        sides = [white[low : foot + 1, c] for c in (c0 - side, c1 + side) if 0 <= c < width]
-        if not sides or max(float(s.mean()) for s in sides) > side_white_max:
+        rows = np.arange(low, foot + 1)
+        side = 2 + int(median_px) // 2
+        side_white = [
+            np.where((c >= 0) & (c < width), white[rows, np.clip(c, 0, width - 1)], False).mean()
+            for c in (left[rows - top] - side, right[rows - top] + side)
+        ]
+        if max(side_white) > side_white_max:
             continue
-        feet.append(pixel)
+        span = (high, left[under_bar], right[under_bar])
+        same = [k for k, other in enumerate(spans) if _overlap(span, other)]
+        if not same:
+            feet.append(pixel)
+            spans.append(span)
+        elif pixel[1] > feet[same[0]][1]:
+            feet[same[0]], spans[same[0]] = pixel, span
     return feet
+
+
+def _overlap(
+    a: tuple[int, NDArray[np.intp], NDArray[np.intp]],
+    b: tuple[int, NDArray[np.intp], NDArray[np.intp]],
+) -> bool:
+    """Whether two candidates' white runs ``(first row, left (R,), right (R,))`` share a pixel
+    on a row both span."""
+    top = max(a[0], b[0])
+    bottom = min(a[0] + len(a[1]), b[0] + len(b[1]))
+    if bottom <= top:
+        return False
+    ra, rb = slice(top - a[0], bottom - a[0]), slice(top - b[0], bottom - b[0])
+    return bool(np.any((a[1][ra] <= b[2][rb]) & (b[1][rb] <= a[2][ra])))
+
+
+def _runs_through(white: BoolImage, c0: int, c1: int) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """Per row of ``white`` (R, W), the first and last column (R,) of the white run through
+    columns ``c0..c1``: the run holding the white pixel of those columns nearest their middle;
+    an empty run (last = first - 1) at the middle where none of them is white on that row.
+    """
+    rows, width = white.shape
+    columns = np.arange(width)
+    centre = (c0 + c1) // 2
+    off = np.where(white[:, c0 : c1 + 1], np.abs(columns[c0 : c1 + 1] - centre), width)
+    found = off.min(axis=1) < width
+    seed = np.where(found, c0 + np.argmin(off, axis=1), centre)
+    r = np.arange(rows)
+    gap_before = np.maximum.accumulate(np.where(white, -1, columns), axis=1)
+    gap_after = np.minimum.accumulate(np.where(white, width, columns)[:, ::-1], axis=1)[:, ::-1]
+    first = np.where(found, gap_before[r, seed] + 1, centre)
+    return first, np.where(found, gap_after[r, seed] - 1, centre - 1)
 
 
 def _rows_over(point: FloatArray, depth_m: float, projection: GroundProjection) -> float:

@@ -64,14 +64,35 @@ def _distance_to_segments(points: FloatArray, segments: FloatArray) -> FloatArra
     return best
 
 
+def _post_distances(
+    origin: FloatArray, rays: FloatArray, posts: FloatArray, radius: float, height: float
+) -> FloatArray:
+    """Distance along each of ``rays`` (N, 3) from ``origin`` (3,) to the nearest of the upright
+    cylinders of ``radius`` and ``height`` (m) standing at ``posts`` (P, 2); inf for a miss."""
+    best = np.full(len(rays), np.inf)
+    a = (rays[:, :2] ** 2).sum(axis=1)
+    for post in posts:
+        offset = origin[:2] - post
+        b = 2.0 * rays[:, :2] @ offset
+        c = offset @ offset - radius**2
+        disc = b**2 - 4.0 * a * c
+        t = (-b - np.sqrt(np.maximum(disc, 0.0))) / (2.0 * a)
+        z = origin[2] + t * rays[:, 2]
+        hit = (disc >= 0.0) & (t > 0.0) & (z >= 0.0) & (z <= height)
+        best = np.where(hit, np.minimum(best, t), best)
+    return best
+
+
 def raycast(
     segments: FloatArray,
     circle: tuple[FloatArray, float] | None = None,
     marks: FloatArray | None = None,
     state: CameraState = STATE,
+    posts: FloatArray | None = None,
 ) -> np.ndarray:
     """An (H, W, 3) uint8 RGB image of painted ``segments`` (S, 2, 2) (centre lines, m, robot
-    frame), an optional ``circle`` (centre, radius) and 0.1 m square ``marks`` (M, 2)."""
+    frame), an optional ``circle`` (centre, radius), 0.1 m square ``marks`` (M, 2) and white
+    goal posts (0.1 m across, 0.8 m tall) standing at ``posts`` (P, 2)."""
     k = 3
     offsets = (np.arange(k) + 0.5) / k - 0.5
     u, v = np.meshgrid(np.arange(CAMERA.width), np.arange(CAMERA.height))
@@ -92,6 +113,10 @@ def raycast(
             paint[hit] |= (np.abs(xy[hit] - m) <= 0.05).all(axis=1)
     colour = np.where(paint[:, None], WHITE, GREEN).astype(np.float64)
     colour[~hit] = SKY
+    if posts is not None:
+        ground_t = np.where(hit, -state.position[2] / np.minimum(rays[:, 2], -1e-12), np.inf)
+        on_post = _post_distances(state.position, rays, posts, 0.05, 0.8) < ground_t
+        colour[on_post] = WHITE
     image = colour.reshape(CAMERA.height, CAMERA.width, k * k, 3).mean(axis=2)
     return np.rint(image).astype(np.uint8)
 
@@ -118,6 +143,20 @@ def of_kind(features: tuple, kind: str) -> list:
 def test_config_rejects_bad_values_naming_the_field(field: str, value: object) -> None:
     with pytest.raises(ValueError, match=f"FieldFeatureConfig.{field}"):
         FieldFeatureConfig(**{field: value})
+
+
+@pytest.mark.parametrize(
+    ("fields", "match"),
+    [
+        ({"position": np.array([math.nan, 0.0, 0.55])}, "CameraState.position"),
+        ({"position": np.zeros(2)}, "CameraState.position"),
+        ({"head_pitch": math.nan}, "CameraState.head_pitch"),
+        ({"head_yaw": math.inf}, "CameraState.head_yaw"),
+    ],
+)
+def test_a_camera_state_of_nan_or_wrong_shape_is_refused(fields: dict, match: str) -> None:
+    with pytest.raises(ValueError, match=match):
+        replace(STATE, **fields)
 
 
 def test_detect_rejects_an_image_of_the_wrong_size() -> None:
@@ -446,6 +485,17 @@ def test_centre_circle_with_the_halfway_line_through_it() -> None:
     np.testing.assert_allclose(crossings, [0.2 - 0.75, 0.2 + 0.75], atol=0.04)
     (line,) = of_kind(features, "line")  # pieces of the circle are not lines
     assert _distance_to_segments(line.points, halfway).max() < 0.02
+
+
+def test_a_post_leaning_in_the_image_is_found_at_its_foot() -> None:
+    """A post off the image centre of a pitched camera leans (verticals meet below it): here
+    by about half its width over its height, so fewer of its columns are white all the way up
+    than it is wide. Its extent is the white run along each row through them."""
+    state = replace(STATE, head_pitch=0.2)
+    post = np.array([2.4, 0.9])
+    image = raycast(np.zeros((0, 2, 2)), state=state, posts=post[None])
+    (found,) = of_kind(detect_field_features(image, CAMERA, state), "goal_post")
+    assert np.hypot(*(found.points[0] - post)) < 0.06
 
 
 def test_covariances_are_positive_definite_and_grow_with_range() -> None:
