@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from perception.geometry import FloatArray, wrap_angle
-from perception.validation import check_choice, check_finite, check_positive
+from perception.validation import check_choice, check_finite, check_positive, finite_vector
 
 Branch = Literal["convex", "concave"]
 BRANCHES: tuple[Branch, ...] = ("convex", "concave")
@@ -144,11 +144,15 @@ def measure_arc(
     turning the robot turns every beam and swings the scanner about the robot origin.
 
     None when the circle holds the scanner (``R >= rho``), has ``R <= 0``, or fewer than three
-    beams are used.
+    beams are used. ValueError, naming the argument, for one that is not finite or of the
+    wrong shape.
     """
-    cx, cy, radius = np.asarray(circle, dtype=np.float64)
-    o = np.asarray(origin, dtype=np.float64)
+    cx, cy, radius = finite_vector(circle, "circle", 3)
+    o = finite_vector(origin, "origin", 2)
+    finite_vector(robot_xy, "robot_xy", 2)
     beams = np.asarray(beta, dtype=np.float64)
+    if beams.ndim != 1 or not np.isfinite(beams).all():
+        raise ValueError(f"beta must be a finite (n,) array, got {beams.tolist()}")
     offset = np.array([cx, cy]) - o
     rho = float(np.hypot(*offset))
     if not 0.0 < radius < rho:

@@ -26,7 +26,7 @@ from perception.circles.fits import angles_around_centre, kcr_covariance
 from perception.circles.segmentation import BreakpointConfig, Segment, segment_breakpoints
 from perception.geometry import FloatArray
 from perception.slam.circle_observations import ArcObservation, CircleObservation
-from perception.validation import InvalidTypeError, check_positive
+from perception.validation import InvalidTypeError, check_finite, check_positive
 
 
 def stands_clear(segment: Segment, ranges: FloatArray, jump_m: float) -> bool:
@@ -79,7 +79,9 @@ def scan_arcs(
     robot frame) and ``ranges`` (B,) (m, NaN for no return) from a scanner ``mount_x_m`` (m)
     ahead of the robot origin. Every segment that stands clear is an arc; its ``fit`` is its
     circle (centre in the robot frame) when it is classified as one and does not hold the
-    sensor; it is ``circular`` when classified as a circle or a line (not "other")."""
+    sensor; it is ``circular`` when classified as a circle or a line (not "other").
+    ``mount_x_m`` must be a finite number, else TypeError or ValueError naming it."""
+    check_finite("", "mount_x_m", mount_x_m)
     scan = np.asarray(ranges, dtype=np.float64)
     beam_angles = np.asarray(angles, dtype=np.float64)
     jump = config.segmentation.jump_threshold_m

@@ -470,3 +470,27 @@ def test_scan_arcs_feed_update_scan() -> None:
     twin.update_scan([ArcObservation(ANGLES[hit], world[hit])], MOUNT_X_M, SIGMA_M)
     np.testing.assert_allclose(slam.mean, twin.mean, rtol=0, atol=1e-12)
     assert abs(slam.circles[0, 2] - TRUE[2]) < 0.02  # mapped 0.02 too large: it moved closer
+
+
+@pytest.mark.parametrize(
+    ("args", "match"),
+    [
+        ({"circle": [math.nan, 1.0, 0.3]}, "circle must be finite"),
+        ({"circle": [2.0, 1.0]}, r"circle must have shape \(3,\)"),
+        ({"origin": [0.0, math.inf]}, "origin must be finite"),
+        ({"robot_xy": [math.nan, 0.0]}, "robot_xy must be finite"),
+        ({"beta": [0.1, math.nan, 0.3]}, r"beta must be a finite \(n,\) array"),
+    ],
+)
+def test_measure_arc_refuses_nan_and_wrong_shapes_naming_the_argument(
+    args: dict[str, Any], match: str
+) -> None:
+    good = {"circle": TRUE, "robot_xy": [0.0, 0.0], "origin": [0.2, 0.0], "beta": BEAMS[80:100]}
+    with pytest.raises(ValueError, match=match):
+        measure_arc(**{**good, **args})
+
+
+@pytest.mark.parametrize("mount", [math.nan, math.inf])
+def test_scan_arcs_refuses_a_mount_that_is_not_finite(mount: float) -> None:
+    with pytest.raises(ValueError, match="mount_x_m must be finite"):
+        scan_arcs(BEAMS, np.full(len(BEAMS), 2.0), mount, ScanCirclesConfig())
