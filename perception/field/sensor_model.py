@@ -222,6 +222,8 @@ def observe_pose(
     pose = finite_vector(prior_pose, "prior_pose", 3)
     if not isinstance(config, SensorModelConfig):
         raise InvalidTypeError(f"config must be a SensorModelConfig, got {type(config).__name__}")
+    if not isinstance(field_map, FieldMap):
+        raise InvalidTypeError(f"field_map must be a FieldMap, got {type(field_map).__name__}")
     items = match_items(features, field_map, config)
     if not items:
         return SensorModelResult(None, pose, math.inf, 0, ())

@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 from perception.geometry import FloatArray
 from perception.landmarks.surf1d import Surf1dFeatures
 from perception.validation import (
+    InvalidTypeError,
     check_bool,
     check_generator,
     check_in_interval,
@@ -123,6 +124,13 @@ def match_features(test: Surf1dFeatures, stored: Surf1dFeatures, config: Matchin
     ``same_sign_only``) passes the ratio test: there is no second neighbour to confuse it
     with. Equal nearest and second-nearest distances fail it.
     """
+    for name, value, kind in (
+        ("test", test, Surf1dFeatures),
+        ("stored", stored, Surf1dFeatures),
+        ("config", config, MatchingConfig),
+    ):
+        if not isinstance(value, kind):
+            raise InvalidTypeError(f"{name} must be a {kind.__name__}, got {type(value).__name__}")
     difference = test.descriptors[:, None, :] - stored.descriptors[None, :, :]
     distance = np.linalg.norm(difference, axis=2)  # (Nt, Ns)
     if config.same_sign_only:

@@ -154,6 +154,8 @@ def extract_features(
     :attr:`perception.landmarks.horizon.HorizonBand.columns`, giving the features' ``x``;
     None: ``x`` is the sample index.
     """
+    if not isinstance(config, Surf1dConfig):
+        raise InvalidTypeError(f"config must be a Surf1dConfig, got {type(config).__name__}")
     f = _signal(signal)
     n = len(f)
     x_of = (

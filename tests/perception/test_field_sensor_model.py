@@ -259,3 +259,8 @@ def test_a_start_per_candidate_finds_the_pose_or_its_twin_from_anywhere() -> Non
     far = twin(TRUTH) + np.array([0.0, 0.0, 1.5])
     single = observe_pose(features, far, FIELD, CONFIG)
     assert single.observation is None or np.abs(pose_error(single.pose, TRUTH)).max() > 0.1
+
+
+def test_a_missing_field_map_is_a_type_error_naming_it() -> None:
+    with pytest.raises(TypeError, match="field_map must be a FieldMap, got NoneType"):
+        observe_pose([], np.zeros(3), None, CONFIG)  # type: ignore[arg-type]

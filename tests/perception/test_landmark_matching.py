@@ -198,3 +198,13 @@ def test_ransac_requires_a_generator() -> None:
     matches, _ = outlier_scene(0)
     with pytest.raises(TypeError, match=r"rng must be a numpy\.random\.Generator"):
         ransac_line(matches, RANSAC, 0)  # type: ignore[arg-type]
+
+
+def test_a_missing_config_or_features_is_a_type_error_naming_it() -> None:
+    features = extract_features(np.sin(np.linspace(0, 20, 160)), Surf1dConfig())
+    with pytest.raises(TypeError, match="config must be a Surf1dConfig, got NoneType"):
+        extract_features(np.zeros(160), None)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="stored must be a Surf1dFeatures, got NoneType"):
+        match_features(features, None, MatchingConfig())  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="config must be a MatchingConfig, got dict"):
+        match_features(features, features, {})  # type: ignore[arg-type]
