@@ -9,6 +9,11 @@ Frames (right-handed, metres, radians):
 
 A planar pose is an array ``(x, y, theta)``. Head angles follow the Nao convention: positive
 yaw turns the head left, positive pitch tilts it down.
+
+These are the inner loops' arithmetic, called thousands of times a frame: they trust their
+inputs to be finite and of the shapes documented (a NaN comes out as a NaN). The public
+boundaries check them instead: the configs, the providers' sensor frames, the filters'
+``update`` methods and :class:`~perception.types.CameraState`.
 """
 
 from __future__ import annotations
