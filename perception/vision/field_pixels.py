@@ -414,22 +414,22 @@ def post_feet(
     """Foot pixels (2,) px (bottom centre) of upright white posts standing on ``ground``
     (carpet or line pixels, (H, W)).
 
-    A column counts where a vertical white run ends on ground (within 2 px below it) and
-    stands at least ``min_height_m[0]`` tall at the range of its bottom, or
-    ``min_height_m[1]`` when the image top cuts it (a lower bound); adjacent such columns
-    with bottoms within half a post's width (at least 3 rows) make one candidate. Its extent on
-    each row is the white run through those columns (a post leaning in the image, off its
-    centre in a pitched or rolled camera, has fewer tall columns than it is wide). Its foot is
-    moved up past rows where that run is wider than a post (the line it stands on runs
-    sideways), over no more than ``max_trim_m`` of ground (a board on the white floor beyond
-    the carpet stands on more); the foot pixel is the middle of the run on the foot's row. A
-    candidate is kept when, from its foot up to ``min_height_m[0]`` (under the crossbar), its
-    median run is within ``width_ratio`` of ``diameter_m`` at that range and steady (upper and
-    lower quartile within 2 px or a quarter of it: not a robot's legs, arms and body), and the
-    pixels half its width beyond each run's ends are at most ``side_white_max`` white from its
-    foot up to ``min_height_m[1]`` on either side (not a sliver of a wider white thing).
-    Candidates whose runs share a pixel there are one post (a lean splits its tall columns):
-    the lowest foot is kept.
+    A column counts where a vertical white run ends on ground (within 2 px below it) and stands
+    at least ``min_height_m[0]`` tall at the range of its bottom, or ``min_height_m[1]`` when
+    the image top cuts it (a lower bound); adjacent such columns with bottoms within half a
+    post's width (at least 3 rows) make one candidate. Its extent on each row is the white run
+    through those columns (a post leaning in the image, off its centre in a pitched or rolled
+    camera, has fewer tall columns than it is wide). Its foot is moved up past rows where that
+    run is wider than a post there, or than its own median run by more than 2 px or a quarter
+    (the line it stands on runs sideways), over no more than ``max_trim_m`` of ground (a board
+    on the white floor beyond the carpet stands on more); the foot pixel is the middle of the
+    run on the foot's row. A candidate is kept when, from its foot up to ``min_height_m[0]``
+    (under the crossbar), its median run is within ``width_ratio`` of ``diameter_m`` at that
+    range and steady (upper and lower quartile within 2 px or a quarter of it: not a robot's
+    legs, arms and body), and the pixels half its width beyond each run's ends are at most
+    ``side_white_max`` white from its foot up to ``min_height_m[1]`` on either side (not a
+    sliver of a wider white thing). Candidates whose runs share a pixel there are one post (a
+    lean splits its tall columns): the lowest foot is kept.
     """
     height, width = white.shape
     cols, tops, ends = row_runs(transposed(white))
@@ -466,7 +466,10 @@ def post_feet(
         depth_m = float(projection.depths(xy)[0]) if hit[0] else 0.0
         if depth_m <= 0:
             continue
-        widest = width_ratio[1] * projection.fx * diameter_m / depth_m
+        steady = float(np.median(run_px))  # the post's own width, whatever its range
+        widest = min(
+            width_ratio[1] * projection.fx * diameter_m / depth_m, steady + max(2.0, steady / 4)
+        )
         foot = bottom
         while foot > top and run_px[foot - top] > widest:
             foot -= 1  # the line the post stands on
