@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from perception.geometry import FloatArray, camera_rotation
 from perception.sensor_models import LaserModel, SonarModel
-from perception.validation import check_finite
+from perception.validation import check_finite, finite_vector
 
 POLE_COLOURS: tuple[str, ...] = ("pink", "yellow", "blue", "green")
 
@@ -142,11 +142,7 @@ class CameraState:
     tilt: float = 0.0
 
     def __post_init__(self) -> None:
-        position = np.asarray(self.position, dtype=np.float64)
-        if position.shape != (3,) or not np.isfinite(position).all():
-            raise ValueError(
-                f"CameraState.position must be 3 finite numbers, got {self.position!r}"
-            )
+        finite_vector(self.position, "CameraState.position", 3)
         for name in ("head_yaw", "head_pitch", "tilt"):
             check_finite("CameraState", name, getattr(self, name))
 

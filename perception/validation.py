@@ -209,6 +209,15 @@ def check_covariance(
         raise InvalidTypeError(f"{name} must be {expected}, got {matrix!r}") from error
     if C.shape != (size, size) or not np.isfinite(C).all():
         raise ValueError(f"{name} must be a finite ({size}, {size}) array, got {C!r}")
+    if singular_ok and size == 2:  # plain floats, as below: the eigenvalues in closed form
+        (a, b), (c, d) = C.tolist()
+        if abs(b - c) > _SYMMETRY_RTOL * max(abs(b), abs(c)) + _SYMMETRY_ATOL:
+            raise ValueError(f"{name} must be symmetric, got {C.tolist()}")
+        s = 0.5 * (b + c)
+        lowest = 0.5 * (a + d) - math.hypot(0.5 * (a - d), s)
+        if lowest < -_PSD_RTOL * max(abs(a), abs(s), abs(d)):
+            raise ValueError(f"{name} must be positive semidefinite, got {C.tolist()}")
+        return np.array([[a, s], [s, d]])
     if singular_ok:
         tolerance = _SYMMETRY_RTOL * np.maximum(np.abs(C), np.abs(C.T)) + _SYMMETRY_ATOL
         if not (np.abs(C - C.T) <= tolerance).all():

@@ -134,8 +134,9 @@ class RobotEnv(gym.Env[dict[str, Any], np.ndarray], Generic[StateT]):
         self.world = BulletWorld(time_step_s=self.config.physics_dt_s)
         self._build()
         self.observation_space = compose_space(self.encoders)
-        self._action_box = self.task.action_space
-        self.action_space = self._action_box
+        box = self.task.action_space
+        self.action_space = box
+        self._action_bounds = (box.low.astype(np.float64), box.high.astype(np.float64))
         self._initial_state = self.world.save_state()
         self._state: StateT | None = None
         self._frame: SensorFrame | None = None
@@ -247,8 +248,7 @@ class RobotEnv(gym.Env[dict[str, Any], np.ndarray], Generic[StateT]):
     # ----- the loop's pieces --------------------------------------------------------------
     def _checked_action(self, action: np.ndarray) -> FloatArray:
         """``action`` as float64 within the action space (:func:`checked_action`)."""
-        space = self._action_box
-        return checked_action(action, space.low.astype(np.float64), space.high.astype(np.float64))
+        return checked_action(action, *self._action_bounds)
 
     def _sense(self, physics_s: float) -> dict[str, float]:
         """Our robot's frame and perception of it; returns the step's timings (s)."""

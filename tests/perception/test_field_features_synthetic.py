@@ -148,8 +148,8 @@ def test_config_rejects_bad_values_naming_the_field(field: str, value: object) -
 @pytest.mark.parametrize(
     ("fields", "match"),
     [
-        ({"position": np.array([math.nan, 0.0, 0.55])}, "CameraState.position"),
-        ({"position": np.zeros(2)}, "CameraState.position"),
+        ({"position": np.array([math.nan, 0.0, 0.55])}, "CameraState.position must be finite"),
+        ({"position": np.zeros(2)}, r"CameraState.position must have shape \(3,\)"),
         ({"head_pitch": math.nan}, "CameraState.head_pitch"),
         ({"head_yaw": math.inf}, "CameraState.head_yaw"),
     ],

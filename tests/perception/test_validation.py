@@ -248,6 +248,30 @@ def test_check_covariance_rejects_what_is_not_one(size: int) -> None:
         check_covariance("x", "C", size)
 
 
+def test_semidefinite_2x2_check_agrees_with_the_eigenvalues() -> None:
+    """The 2 x 2 semidefinite check (closed-form eigenvalues) against numpy's eigenvalues: it
+    accepts what they call semidefinite, singular ones included, refuses the rest, and
+    returns the matrix symmetrised."""
+    rng = np.random.default_rng(5)
+    for _ in range(2000):
+        a, d = rng.uniform(-0.2, 1.0, size=2)
+        b = rng.uniform(-1.0, 1.0) * math.sqrt(max(a * d, 0.0)) * rng.choice([0.5, 1.0, 1.2])
+        C = np.array([[a, b], [b * (1 + 1e-12), d]])
+        lowest = float(np.linalg.eigvalsh(0.5 * (C + C.T)).min())
+        scale = float(np.abs(C).max())
+        if lowest >= -1e-13 * scale:  # semidefinite within the documented 1e-12
+            np.testing.assert_allclose(
+                check_covariance(C, "C", 2, singular_ok=True), 0.5 * (C + C.T), rtol=0, atol=0
+            )
+        elif lowest < -1e-11 * scale:
+            with pytest.raises(ValueError, match=r"^C must be positive semidefinite"):
+                check_covariance(C, "C", 2, singular_ok=True)
+    singular = np.array([[1.0, 2.0], [2.0, 4.0]])  # rank one
+    np.testing.assert_array_equal(check_covariance(singular, "C", 2, singular_ok=True), singular)
+    with pytest.raises(ValueError, match=r"^C must be symmetric"):
+        check_covariance([[1.0, 0.1], [0.0, 1.0]], "C", 2, singular_ok=True)
+
+
 def test_check_generator_takes_only_a_numpy_generator() -> None:
     check_generator("rng", np.random.default_rng(0))
     for bad in (np.random.RandomState(0), 0, None):
