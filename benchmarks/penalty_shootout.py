@@ -658,10 +658,11 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=RESULTS, help="output folder")
     parser.add_argument(
         "--self-pose",
-        choices=("ekf_slam", "field_features", "oracle", "truth"),
+        choices=("ekf_slam", "field_features", "ekf_slam_field_features", "oracle", "truth"),
         default="ekf_slam",
         help="the striker's self pose: the default EKF SLAM, the field-feature pose filter "
-        "(lines, junctions, posts from the same image), or the oracle ablation (the true "
+        "(lines, junctions, posts from the same image), EKF SLAM fusing that model's pose "
+        "observations, or the oracle ablation (the true "
         "pose with white noise, OracleConfig's 5 cm / 0.02 rad) or the true pose (the oracle "
         "with 1 nm / 1 nrad noise); outputs named penalty_shootout_<self pose>*",
     )

@@ -11,7 +11,8 @@ Wilson 95 % interval, the mean return, and the ball estimate's position error wh
 ball lies within 3 m of our robot (mean, median, 95th percentile; frames in which a ball is
 believed: seen, and not lost since), on the field (the believed pose's error included) and
 relative to the robot (the egocentric filter's own), with the share of those frames in which a
-ball is believed; and the env steps per second.
+ball is believed; the believed pose's position and heading error over every frame (mean,
+median, 95th percentile); and the env steps per second.
 
     python benchmarks/soccer_baselines.py --mode geometric --episodes 100
     python benchmarks/soccer_baselines.py --mode rendered --episodes 30
@@ -87,6 +88,7 @@ def run(env_id: str, player: str, args: argparse.Namespace) -> dict[str, Any]:
     env = gym.make(env_id, **env_kwargs(args.mode, args.set))
     policy = load_policy(player, env.get_wrapper_attr("config"))
     outcomes, returns, errors, relative_errors, steps, near_frames = [], [], [], [], 0, 0
+    position_errors, heading_errors = [], []
     start = time.perf_counter()
     for seed in range(args.seed, args.seed + args.episodes):
         obs, info = env.reset(seed=seed)
@@ -98,6 +100,9 @@ def run(env_id: str, player: str, args: argparse.Namespace) -> dict[str, Any]:
             done, episode_return = terminated or truncated, episode_return + float(reward)
             steps += 1
             truth, belief = info["ground_truth"], info["perception"]
+            offset = belief["pose"] - truth["robot_pose"]
+            position_errors.append(float(np.hypot(offset[0], offset[1])))
+            heading_errors.append(abs(math.remainder(float(offset[2]), math.tau)))
             near = np.hypot(*(truth["ball"] - truth["robot_pose"][:2])) < NEAR_M
             near_frames += int(near)
             if belief["ball_known"] and near:
@@ -126,6 +131,8 @@ def run(env_id: str, player: str, args: argparse.Namespace) -> dict[str, Any]:
         "ball_error_m": error_stats(errors),
         "ball_relative_error_m": error_stats(relative_errors),
         "ball_believed_near": len(errors) / max(near_frames, 1),
+        "pose_error_m": error_stats(position_errors),
+        "heading_error_rad": error_stats(heading_errors),
         "steps_per_s": steps / seconds,
     }
 
@@ -178,16 +185,19 @@ def markdown(results: list[dict[str, Any]], args: argparse.Namespace) -> str:
         f"{args.seed + args.episodes - 1}" + (f", {' '.join(args.set)}" if args.set else ""),
         "",
         "| env | player | success (95 % CI) | mean return | ball error near (m): mean / median"
-        " / p95 | the same relative to the robot | ball believed while near | steps/s |",
-        "|---|---|---|---|---|---|---|---|",
+        " / p95 | the same relative to the robot | ball believed while near | pose error (m)"
+        " / heading error (°): mean | steps/s |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for r in results:
         e, q = r["ball_error_m"], r["ball_relative_error_m"]
+        pose, heading = r["pose_error_m"]["mean"], math.degrees(r["heading_error_rad"]["mean"])
         lines.append(
             f"| {r['env']} | {r['player']} | {r['success']:.0%} ({r['success_ci95'][0]:.0%}-"
             f"{r['success_ci95'][1]:.0%}) | {r['mean_return']:.2f} | {e['mean']:.3f} / "
             f"{e['median']:.3f} / {e['p95']:.3f} | {q['mean']:.3f} / {q['median']:.3f} / "
-            f"{q['p95']:.3f} | {r['ball_believed_near']:.0%} | {r['steps_per_s']:.0f} |"
+            f"{q['p95']:.3f} | {r['ball_believed_near']:.0%} | {pose:.3f} / {heading:.1f} | "
+            f"{r['steps_per_s']:.0f} |"
         )
     return "\n".join(lines) + "\n"
 

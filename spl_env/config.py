@@ -14,7 +14,7 @@ import math
 import typing
 from dataclasses import dataclass, field
 
-from perception.pipeline import PipelineConfig
+from perception.pipeline import POLE_MAPPING_POSES, PipelineConfig
 from perception.validation import check_choice, check_int
 from spl_env.robots.nao import RobotConfig
 from spl_env.scenes.spl_field import SceneConfig
@@ -116,9 +116,10 @@ class EnvConfig(CoreConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if not self.scene.poles_enabled and self.perception.self_pose == "ekf_slam":
+        if not self.scene.poles_enabled and self.perception.self_pose in POLE_MAPPING_POSES:
             raise ValueError(
                 "EnvConfig.scene.poles_enabled=False needs a self pose that does not map the "
-                "poles: perception.self_pose='field_features' (or 'oracle'), got 'ekf_slam'"
+                "poles: perception.self_pose='field_features' (or 'oracle'), got "
+                f"{self.perception.self_pose!r}"
             )
         check_int("EnvConfig", "observed_circles", self.observed_circles, 1)

@@ -57,9 +57,8 @@ from perception.estimation.kalman import (
     innovation_covariance,
     joseph_update,
     predict,
-    wrapped_residual,
 )
-from perception.field.pose_observation import PoseObservation
+from perception.field.pose_observation import PoseObservation, whitened_measurement
 from perception.geometry import FloatArray, wrap_angle
 from perception.slam.ekf_slam import EkfSlamConfig, motion
 from perception.validation import (
@@ -71,13 +70,8 @@ from perception.validation import (
     is_finite_real,
 )
 
-_HEADING = (2,)  # index of the angle in a pose (x, y, theta)
 _R = np.eye(3)  # covariance of the whitened measurement y = L^(1/2) e (unitless)
 _R.flags.writeable = False
-# Eigenvalues of L below this fraction of its largest are rounding, not information: they are
-# dropped from L^(1/2) and from the gate's degrees of freedom. L mixes units (1/m², 1/rad²),
-# but no real observation is a billion times less certain in one direction than in another.
-_RANK_RTOL = 1e-9
 _ODOMETRY_DEFAULTS = EkfSlamConfig()  # the odometry noise model is EKF SLAM's, defaults too
 _ODOMETRY_FIELDS = (
     "translation_noise_m_per_sqrt_m",
@@ -259,18 +253,9 @@ class PoseFilter:
         return True
 
     def _linearise(self, observation: object, name: str) -> tuple[FloatArray, FloatArray, int]:
-        """``y = H e`` (3,), ``H = L^(1/2)`` (3, 3) and ``rank(L)`` of an observation, checked."""
-        if not isinstance(observation, PoseObservation):
-            raise TypeError(f"{name} must be a PoseObservation, got {type(observation).__name__}")
-        # Heading: near ±pi the plain difference z - x can be off by 2 pi.
-        e = wrapped_residual(observation.pose, self._x, _HEADING)
-        eigenvalues, U = np.linalg.eigh(self._config.observation_weight * observation.information)
-        largest = float(eigenvalues[-1])
-        kept = eigenvalues > _RANK_RTOL * largest if largest > 0 else np.zeros(3, dtype=bool)
-        root = np.sqrt(np.where(kept, eigenvalues, 0.0))
-        H = (U * root) @ U.T
-        H = 0.5 * (H + H.T)
-        return H @ e, H, int(kept.sum())
+        """``y = H e`` (3,), ``H = L^(1/2)`` (3, 3) and ``rank(L)`` of an observation, checked
+        (:func:`~perception.field.pose_observation.whitened_measurement`)."""
+        return whitened_measurement(observation, self._x, self._config.observation_weight, name)
 
 
 def _pose(value: ArrayLike, name: str) -> FloatArray:

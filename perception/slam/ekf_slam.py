@@ -59,6 +59,7 @@ from numpy.typing import ArrayLike
 
 from perception.estimation.gating import chi2_threshold, within_gate
 from perception.estimation.kalman import innovation_covariance, joseph_update, wrapped_residual
+from perception.field.pose_observation import PoseObservation, whitened_measurement
 from perception.geometry import FloatArray, compose, wrap_angle
 from perception.types import LandmarkObservation, SlamEstimate
 from perception.validation import (
@@ -73,6 +74,9 @@ from perception.validation import (
 
 _MIN_RANGE_M = 1e-6  # below this a landmark estimate sits on the robot and h cannot be linearised
 _BEARING = (1,)  # index of the angle in a (range, bearing) measurement
+_POSE = np.arange(3)  # state indices of the robot pose
+_WHITE = np.eye(3)  # covariance of a whitened pose measurement (unitless)
+_WHITE.flags.writeable = False
 
 BACKENDS = ("classic", "gated", "minimal_view", "fej")  # values of EkfSlamConfig.backend
 GATES = ("none", "thresholds", "mahalanobis")  # values of EkfSlamConfig.gate
@@ -288,6 +292,8 @@ class EkfSlam:
         self._predicted_pose = self._mu.copy()  # p_{k|k-1}
         self._G = np.eye(3)  # G of the latest predict
         self._rejected = 0
+        self._rejected_poses = 0
+        self._pose_gates: dict[tuple[float, int], float] = {}  # (p, dof) -> chi-square quantile
 
     @property
     def config(self) -> EkfSlamConfig:
@@ -313,6 +319,11 @@ class EkfSlam:
     def rejected(self) -> int:
         """How many sightings of mapped landmarks the gate has discarded so far."""
         return self._rejected
+
+    @property
+    def rejected_poses(self) -> int:
+        """How many pose observations :meth:`update_pose`'s gate has refused so far."""
+        return self._rejected_poses
 
     @property
     def pending_views(self) -> dict[int, int]:
@@ -393,6 +404,54 @@ class EkfSlam:
             else:
                 fused += self._sight_unmapped(landmark_id, z, Q)
         return fused
+
+    def update_pose(
+        self,
+        observation: PoseObservation,
+        *,
+        weight: float = 1.0,
+        gate_probability: float | None = None,
+    ) -> bool:
+        """Fuse an observation of the robot pose itself (the field features' unified sensor
+        model, :func:`perception.field.sensor_model.observe_pose`); return whether it was fused.
+
+        The observation is the linear measurement ``y = H e`` of the pose block with ``R = I``
+        (:func:`~perception.field.pose_observation.whitened_measurement`: ``H = (weight
+        L)^(1/2)``, ``weight`` in (0, 1] the share of its information ``L`` fused), so the
+        update is ``Sigma+ = (Sigma^-1 + weight L_full)^-1`` with ``L`` in the pose block; the
+        cross-covariances carry it to the landmarks. ``H`` does not depend on the state, so
+        every back end (FEJ too) takes the same update. With ``gate_probability`` in (0, 1),
+        the observation is refused (counted in :attr:`rejected_poses`, the filter unchanged)
+        when ``y^T S^-1 y`` exceeds the chi-square quantile with ``rank(L)`` degrees of freedom;
+        None fuses every observation. One that carries no information is not fused either.
+        """
+        check_positive("update_pose", "weight", weight, upper=1.0, upper_inclusive=True)
+        if gate_probability is not None:
+            check_positive("update_pose", "gate_probability", gate_probability, upper=1.0)
+        y, H, rank = whitened_measurement(observation, self._mu[:3], float(weight))
+        if rank == 0:
+            return False
+        S = innovation_covariance(self._sigma, H, _WHITE, _POSE)
+        if gate_probability is not None:
+            key = (float(gate_probability), rank)
+            if key not in self._pose_gates:
+                self._pose_gates[key] = chi2_threshold(*key)
+            if not within_gate(y, S, self._pose_gates[key]):
+                self._rejected_poses += 1
+                return False
+        mu, self._sigma = joseph_update(self._mu, self._sigma, y, H, _WHITE, _POSE, S=S)
+        mu[2] = wrap_angle(mu[2])
+        self._mu = mu
+        return True
+
+    def inflate_pose(self, extra_cov: ArrayLike) -> None:
+        """Add ``extra_cov`` (3, 3), symmetric positive semidefinite (m², m², rad² and
+        products), to the pose block of ``Sigma``: motion the odometry did not report (a
+        slip, a blocked walk), so later observations may pull the pose back. The landmarks'
+        blocks and the cross-covariances stay; ``Sigma`` stays positive semidefinite. A bad
+        argument raises and leaves the filter unchanged."""
+        extra = check_covariance(extra_cov, "extra_cov", 3, singular_ok=True)
+        self._sigma[:3, :3] += extra
 
     def innovation(self, observation: LandmarkObservation) -> tuple[FloatArray, FloatArray]:
         """``y`` (2,) and ``S`` (2, 2) of a sighting of an already mapped landmark.

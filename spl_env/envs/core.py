@@ -29,7 +29,7 @@ from gymnasium import spaces
 from numpy.typing import NDArray
 
 from perception.geometry import FloatArray, wrap_angle
-from perception.pipeline import PerceptionPipeline
+from perception.pipeline import FIELD_FEATURE_POSES, PerceptionPipeline
 from perception.providers.base import PerceptionContext
 from perception.representations import (
     CIRCLE_MAP,
@@ -293,7 +293,7 @@ def perception_outputs(config: EnvConfig, requires: set[str]) -> set[str]:
             outputs.discard(POLE_SIGHTINGS)
         if config.sensors.laser is not None:
             outputs.add(CIRCLE_MAP)
-        if config.perception.self_pose == "field_features":
+        if config.perception.self_pose in FIELD_FEATURE_POSES:
             outputs.add(FIELD_FEATURES)
     return outputs
 
@@ -391,7 +391,7 @@ class SplEnv(RobotEnv[WorldState]):
         self.encoders = self.task.encoders()
         if cfg.sensors.laser is not None:  # the laser maps circles
             self.encoders += (CircleMapEncoder(cfg.observed_circles),)
-        if cfg.perception.self_pose == "field_features":
+        if cfg.perception.self_pose in FIELD_FEATURE_POSES:
             self.encoders += (FieldFeatureEncoder(),)
         emulators = emulators_for(self.scene, self.robots, cfg.sensors, cfg.perception)
         requires = {name for encoder in self.encoders for name in encoder.requires}

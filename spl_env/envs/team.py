@@ -40,7 +40,7 @@ from numpy.typing import NDArray
 from pettingzoo import ParallelEnv
 
 from perception.geometry import FloatArray, wrap_angle
-from perception.pipeline import PerceptionPipeline
+from perception.pipeline import FIELD_FEATURE_POSES, PerceptionPipeline
 from perception.representations import (
     BALL,
     SELF_POSE,
@@ -231,12 +231,12 @@ class TeamEnv(ParallelEnv[str, dict[str, np.ndarray], np.ndarray]):
     **Observation** (per agent): the keys, spaces and meaning of ``SPL/Striker-v0``'s
     (:mod:`spl_env.envs.soccer`): ``self_pose_field``, ``self_pose_std``, ``head_angles``, the
     ``ball_*`` keys, the ``robots_*`` keys (``robots_team`` +1 for a teammate, -1 for an
-    opponent) and ``time_fraction``; plus ``field_features_since_seen`` with
-    ``self_pose="field_features"``. Each is that player's own perception. **Mirroring**: a red
-    player's observation reads as if it attacked +x, the field turned by π about its centre,
-    ``(x, y, θ) -> (-x, -y, θ + π)``: ``self_pose_field`` ``(x, y, cos θ, sin θ)`` is negated
-    (:func:`mirror_observation`); every other key is robot-relative and unchanged. One policy
-    can then play both sides.
+    opponent) and ``time_fraction``; plus ``field_features_since_seen`` with a self pose that
+    reads the field features (``"field_features"``, ``"ekf_slam_field_features"``). Each is
+    that player's own perception. **Mirroring**: a red player's observation reads as if it
+    attacked +x, the field turned by π about its centre, ``(x, y, θ) -> (-x, -y, θ + π)``:
+    ``self_pose_field`` ``(x, y, cos θ, sin θ)`` is negated (:func:`mirror_observation`); every
+    other key is robot-relative and unchanged. One policy can then play both sides.
 
     **Reward** (per agent, its team's): ``goal`` +10 when the team scores, -10 when it concedes;
     ``progress`` the metres the ball came nearer the opponent goal's centre this step; ``time``
@@ -343,8 +343,8 @@ class TeamEnv(ParallelEnv[str, dict[str, np.ndarray], np.ndarray]):
 
     def _encoders(self, team: int) -> tuple[ObservationEncoder, ...]:
         """Team ``team``'s encoders: :meth:`spl_env.tasks.soccer.SoccerTask.encoders`' with
-        ``robots_team`` relative to ``team``, and the field features' with
-        ``self_pose="field_features"`` (as :class:`spl_env.envs.core.SplEnv`)."""
+        ``robots_team`` relative to ``team``, and the field features' with a self pose that
+        reads them (as :class:`spl_env.envs.core.SplEnv`)."""
         cfg = self.config
         encoders: tuple[ObservationEncoder, ...] = (
             SelfPoseEncoder(self.scene.dimensions),
@@ -353,7 +353,7 @@ class TeamEnv(ParallelEnv[str, dict[str, np.ndarray], np.ndarray]):
             RobotTracksEncoder(cfg.task.max_tracked_robots, our_team=team),
             EpisodeClockEncoder(cfg.task.episode_s),
         )
-        if cfg.perception.self_pose == "field_features":
+        if cfg.perception.self_pose in FIELD_FEATURE_POSES:
             encoders += (FieldFeatureEncoder(),)
         return encoders
 

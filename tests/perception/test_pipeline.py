@@ -195,7 +195,13 @@ def test_unknown_provider_name_raises_naming_the_field(field: str, value: str) -
 
 def test_registry_names_the_documented_providers() -> None:
     assert set(PROVIDERS[POLE_SIGHTINGS]) == {"cnn", "colour", "oracle"}
-    assert set(PROVIDERS[SELF_POSE]) == {"ekf_slam", "oracle", "circle_slam", "field_features"}
+    assert set(PROVIDERS[SELF_POSE]) == {
+        "ekf_slam",
+        "oracle",
+        "circle_slam",
+        "field_features",
+        "ekf_slam_field_features",
+    }
     assert set(PROVIDERS[CIRCLE_MAP]) == {"laser", "slam"}
 
 

@@ -320,6 +320,11 @@ def test_env_config_validates_when_built_directly() -> None:
         EnvConfig(control_dt_s=0.1, physics_dt_s=0.03)
     with pytest.raises(ValueError, match="poles_enabled=False needs a self pose"):
         EnvConfig(scene=SceneConfig(poles_enabled=False))
+    with pytest.raises(ValueError, match="got 'ekf_slam_field_features'"):
+        EnvConfig(
+            scene=SceneConfig(poles_enabled=False),
+            perception=PipelineConfig(self_pose="ekf_slam_field_features"),
+        )
     with pytest.raises(ValueError, match="info_level"):
         EnvConfig(info_level="none")
     with pytest.raises(ValueError, match="whole number"):

@@ -1,0 +1,29 @@
+"""SPL envs whose pose is EKF SLAM over the poles with the field features' pose observations
+fused in (``self_pose="ekf_slam_field_features"``)."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+from perception.field.features import FEATURE_KINDS
+
+FUSED = {"camera_mode": "geometric", "frontend": "colour", "self_pose": "ekf_slam_field_features"}
+
+
+@pytest.mark.parametrize("env_id", ["SPL/ActiveVision-v1", "SPL/Striker-v0"])
+def test_check_env_passes_with_the_fused_pose(env_id: str) -> None:
+    env = gym.make(env_id, episode_s=1.0, **FUSED)
+    check_env(env.unwrapped, skip_render_check=True)
+    env.close()
+
+
+def test_the_observation_holds_the_pole_map_and_the_field_features_clock() -> None:
+    env = gym.make("SPL/ActiveVision-v1", episode_s=1.0, **FUSED)
+    obs, _ = env.reset(seed=0)
+    assert any(key.startswith("landmarks_") for key in obs)
+    assert obs["field_features_since_seen"].shape == (len(FEATURE_KINDS),)
+    _, _, _, _, info = env.step(env.action_space.sample())
+    assert "field_features" in info["perception"]
+    env.close()
