@@ -33,7 +33,14 @@ from the field's lines, with no pole on the field).
 ``--group NAME=PREFIX`` pools the players whose spec starts with PREFIX (one recipe's training
 seeds): the success share over all their episodes (Wilson interval) and the t-interval over
 the seeds' shares; ``--paired-with PLAYER`` gives each player's success share minus that one's
-on the same episodes, with the t-interval of the per-episode differences.
+on the same episodes, with the t-interval of the per-episode differences;
+``--paired-with-run PATH`` the same against each (env, player) of an earlier run's JSON on
+the same seeds (another setting, e.g. the self pose, on the same episodes)::
+
+    python benchmarks/soccer_baselines.py --envs SPL/Striker-v0 --name striker_slam_poles
+    python benchmarks/soccer_baselines.py --envs SPL/Striker-v0 \
+        --set self_pose=ekf_slam_field_features --name striker_slam_field \
+        --paired-with-run benchmarks/results/striker_slam_poles_geometric.json
 """
 
 from __future__ import annotations
@@ -168,6 +175,21 @@ def paired_difference(result: dict[str, Any], reference: dict[str, Any]) -> dict
     return {"minus": reference["player"], "difference": float(diff.mean()), "ci95": interval}
 
 
+def earlier_run(path: Path, args: argparse.Namespace) -> dict[tuple[str, str], dict[str, Any]]:
+    """The results of an earlier run's JSON by (env, player); ValueError unless it played the
+    same camera mode, seeds and number of episodes as ``args``."""
+    earlier = json.loads(path.read_text())
+    if earlier["mode"] != args.mode or earlier["seed"] != args.seed:
+        raise ValueError(
+            f"--paired-with-run {path} played mode {earlier['mode']!r} from seed "
+            f"{earlier['seed']}, this run {args.mode!r} from {args.seed}"
+        )
+    results = {(r["env"], r["player"]): r for r in earlier["results"]}
+    if any(r["episodes"] != args.episodes for r in results.values()):
+        raise ValueError(f"--paired-with-run {path} played other than {args.episodes} episodes")
+    return results
+
+
 def error_stats(errors: list[float]) -> dict[str, Any]:
     """Frames, mean, median and 95th percentile (m) of ``errors``."""
     return {
@@ -229,6 +251,14 @@ def main() -> None:
         metavar="PLAYER",
         help="also each player's success share minus this one's, paired on the episodes",
     )
+    parser.add_argument(
+        "--paired-with-run",
+        type=Path,
+        default=None,
+        metavar="PATH",
+        help="also each (env, player)'s success share minus the same one's in this earlier "
+        "run's JSON (same --seed and --episodes), paired on the episodes",
+    )
     add_overrides_argument(parser)
     parser.add_argument("--name", default="soccer_baselines", help="output file stem")
     parser.add_argument("--out", type=Path, default=RESULTS)
@@ -253,6 +283,7 @@ def main() -> None:
             parser.error(f"--group takes NAME=PREFIX matching >= 2 players, got {pair!r}")
     if args.paired_with is not None and args.paired_with not in {p for _, p in runs}:
         parser.error(f"--paired-with {args.paired_with!r} is not one of the players")
+    earlier = {} if args.paired_with_run is None else earlier_run(args.paired_with_run, args)
     results = [run(env_id, player, args) for env_id, player in runs]
     groups, paired = [], []
     for env_id in dict.fromkeys(env_id for env_id, _ in runs):
@@ -268,6 +299,16 @@ def main() -> None:
             for r in played
             if reference and r is not reference[0]
         ]
+    paired_runs = [
+        {
+            "env": r["env"],
+            "player": r["player"],
+            **paired_difference(r, earlier[(r["env"], r["player"])]),
+            "minus": str(args.paired_with_run),
+        }
+        for r in results
+        if (r["env"], r["player"]) in earlier
+    ]
     args.out.mkdir(parents=True, exist_ok=True)
     stem = f"{args.name}_{args.mode}"
     (args.out / f"{stem}.json").write_text(
@@ -279,11 +320,14 @@ def main() -> None:
                 "results": results,
                 "groups": groups,
                 "paired": paired,
+                "paired_with_run": paired_runs,
             },
             indent=1,
         )
     )
-    print(json.dumps({"groups": groups, "paired": paired}, indent=1))
+    print(
+        json.dumps({"groups": groups, "paired": paired, "paired_with_run": paired_runs}, indent=1)
+    )
     (args.out / f"{stem}.md").write_text(markdown(results, args))
     print(markdown(results, args))
 

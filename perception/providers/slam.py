@@ -9,16 +9,13 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from perception.estimation.kalman import wrapped_residual
-from perception.field.pose_observation import PoseObservation
+from perception.field.pose_observation import PoseObservation, whitened_measurement
 from perception.field.sensor_model import SensorModelConfig, observe_pose
 from perception.providers.base import PerceptionContext, Provider
 from perception.representations import FIELD_FEATURES, ODOMETRY, POLE_SIGHTINGS, SELF_POSE, Prior
 from perception.slam import EkfSlam, EkfSlamConfig
 from perception.types import SlamEstimate
 from perception.validation import check_int, check_positive, check_probability
-
-_HEADING = (2,)  # index of the angle in a pose (x, y, theta)
 
 
 class EkfSlamProvider(Provider):
@@ -63,14 +60,18 @@ class FieldFusionConfig:
       same lines with errors they share, which the filter takes as independent);
     - ``gate_probability`` in (0, 1): an observation is refused when its squared Mahalanobis
       distance exceeds the chi-square quantile with ``rank(information)`` degrees of freedom;
-      None fuses every observation;
-    - ``after_refused_frames`` (int >= 0): after this many refused in a row, the pose
-      covariance is inflated (:class:`EkfSlamFieldPose`); 0 never inflates.
+      None fuses every observation. The distance is against ``Sigma_pose + (weight L)^-1``,
+      so the gate is as much looser than one on the observation's own covariance as
+      ``1 / weight`` (5x in variance at 0.2);
+    - ``after_refused_observations`` (int >= 0): after this many observations in a row
+      refused by the gate, the pose covariance is inflated (:class:`EkfSlamFieldPose`); frames
+      without an observation (no features, or the sensor model's refusal) neither count nor
+      break the run; 0 never inflates.
     """
 
     observation_weight: float = 0.2
     gate_probability: float | None = 0.99
-    after_refused_frames: int = 8
+    after_refused_observations: int = 8
 
     def __post_init__(self) -> None:
         owner = "FieldFusionConfig"
@@ -79,7 +80,7 @@ class FieldFusionConfig:
         )
         if self.gate_probability is not None:
             check_probability(owner, "gate_probability", self.gate_probability)
-        check_int(owner, "after_refused_frames", self.after_refused_frames, 0)
+        check_int(owner, "after_refused_observations", self.after_refused_observations, 0)
 
 
 class EkfSlamFieldPose(EkfSlamProvider):
@@ -96,10 +97,13 @@ class EkfSlamFieldPose(EkfSlamProvider):
     **Refused in a row.** A robot whose walk is blocked stays put while its odometry reports
     the steps (and turns) it commanded. SLAM follows the odometry and its covariance does not
     grow with the error, so its gate comes to refuse the very observations that would correct
-    it. When the gate has refused ``fusion.after_refused_frames`` field observations in a row,
-    the pose block of the covariance grows by ``e e^T``, ``e`` (3,) the residual of the
-    frame's observation from the SLAM pose (the disagreement, in its own direction), and that
-    observation is fused at once, ungated.
+    it. When the gate has refused ``fusion.after_refused_observations`` field observations in a
+    row, the pose block of the covariance grows by ``e e^T``, ``e`` (3,) the residual of the
+    frame's observation from the SLAM pose in the directions the observation informs (the
+    disagreement, in its own direction: a single line adds nothing along itself), and that
+    observation is fused at once, ungated. Nothing checks that the refused observations agree
+    with one another: a wrong match the sensor model makes eight times in a row is taken, and
+    the poles must pull the pose back.
     """
 
     requires = (ODOMETRY, POLE_SIGHTINGS, FIELD_FEATURES)
@@ -134,20 +138,24 @@ class EkfSlamFieldPose(EkfSlamProvider):
         return slam.estimate()
 
     def _fuse(self, observation: PoseObservation) -> None:
-        """Fuse a field observation; after too many refused in a row, inflate and fuse it."""
+        """Fuse a field observation; after too many refused in a row, inflate and fuse it.
+        One without information is neither fused nor refused: the count stays."""
         slam, fusion = self.slam, self.fusion
         refused = slam.rejected_poses
-        slam.update_pose(
+        if slam.update_pose(
             observation,
             weight=fusion.observation_weight,
             gate_probability=fusion.gate_probability,
-        )
-        if slam.rejected_poses == refused:
+        ):
             self._refused = 0
             return
+        if slam.rejected_poses == refused:
+            return
         self._refused += 1
-        if fusion.after_refused_frames and self._refused >= fusion.after_refused_frames:
-            e = wrapped_residual(observation.pose, slam.mean[:3], _HEADING)
+        limit = fusion.after_refused_observations
+        if limit and self._refused >= limit:
+            y, H, _ = whitened_measurement(observation, slam.mean[:3], fusion.observation_weight)
+            e = np.linalg.pinv(H, hermitian=True) @ y  # the residual where it informs
             slam.inflate_pose(np.outer(e, e))
             slam.update_pose(observation, weight=fusion.observation_weight)
             self._refused = 0

@@ -21,6 +21,12 @@ Symbols, as in the seed and in Thrun, Burgard & Fox, *Probabilistic Robotics*, c
 The correction, its gate and the checks of inputs come from :mod:`perception.estimation` and
 :mod:`perception.validation`, where (filterpy's symbols) this ``Q`` is called ``R``.
 
+Besides the pole sightings, :meth:`EkfSlam.update_pose` fuses an observation of the pose itself
+(the field features' unified sensor model): ``H`` is then (3, 3), ``(w L)^(1/2)`` on the pose
+columns, with ``R = I`` (:func:`perception.field.pose_observation.whitened_measurement`); and
+:meth:`EkfSlam.inflate_pose` adds to the pose block of ``Sigma`` motion the odometry did not
+report.
+
 The four back ends of seed 000 (§2.1.3, §3.2.1, Table 4.1), chosen by ``EkfSlamConfig.backend``:
 
 - ``"classic"``: Algorithm 5. A landmark enters the map at its first sighting; every sighting

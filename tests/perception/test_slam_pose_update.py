@@ -16,8 +16,8 @@ from perception.field.visibility import FeatureViewConfig
 from perception.geometry import FloatArray, compose, wrap_angle
 from perception.pipeline import PerceptionPipeline, PipelineConfig
 from perception.providers.base import PerceptionContext
-from perception.providers.slam import FieldFusionConfig
-from perception.representations import ODOMETRY_POSE, SELF_POSE
+from perception.providers.slam import EkfSlamFieldPose, FieldFusionConfig
+from perception.representations import ODOMETRY_POSE, SELF_POSE, Prior
 from perception.slam import EkfSlam, EkfSlamConfig
 from perception.types import (
     CameraModel,
@@ -122,35 +122,58 @@ def test_without_landmarks_it_is_the_field_pose_filter_update() -> None:
 
 @pytest.mark.parametrize("information", [FULL, LINE], ids=["3 dof", "2 dof"])
 def test_the_gate_refuses_beyond_the_chi_square_quantile(information: FloatArray) -> None:
-    """``d² = e^T (Sigma_pose + L^-1)^-1 e`` in the informed subspace, against chi2(rank L):
-    an observation just inside the 99 % quantile is fused, one just outside refused."""
+    """With the fused share ``w`` of ``L``, the distance in the subspace ``w L`` informs,
+    written here from its eigenvectors ``U_k`` and eigenvalues ``Lambda_k``:
+    ``d² = e_k^T (U_k^T Sigma_pose U_k + Lambda_k^-1)^-1 e_k``, ``e_k = U_k^T e``, against
+    chi2(rank L) at 99 %: an observation just inside is fused, one just outside refused. The
+    residual also has a large part along the line, which a line does not inform."""
+    weight = 0.2
     slam = mapped_slam()
-    dof = np.linalg.matrix_rank(information)
-    threshold = chi2.ppf(0.99, dof)
-    direction = np.array([0.6, -0.5, 0.4]) if dof == 3 else _n + np.array([0.0, 0.0, 0.5])
-    # d² of a residual e = s * direction, written out: the whitened innovation y = H e,
-    # S = H Sigma H + I with H = L^(1/2)
-    w, U = np.linalg.eigh(information)
-    H = (U * np.sqrt(np.clip(w, 0.0, None))) @ U.T
-    y = H @ direction
-    d2_unit = float(y @ np.linalg.solve(H @ slam.cov[:3, :3] @ H + np.eye(3), y))
-    scale = math.sqrt(threshold / d2_unit)
+    values, vectors = np.linalg.eigh(weight * information)
+    kept = values > 1e-9 * values.max()
+    U_k, Lambda_k = vectors[:, kept], values[kept]
+    threshold = chi2.ppf(0.99, int(kept.sum()))
+    direction = np.array([0.6, -0.5, 0.4]) + (0.0 if kept.all() else 2.0) * _u
+
+    def d2(e: FloatArray) -> float:
+        e_k = U_k.T @ e
+        inner = U_k.T @ slam.cov[:3, :3] @ U_k + np.diag(1.0 / Lambda_k)
+        return float(e_k @ np.linalg.solve(inner, e_k))
+
+    scale = math.sqrt(threshold / d2(direction))
     for factor, fused in ((0.99, True), (1.01, False)):
         trial = mapped_slam()
         before_mu, before_cov = trial.mean, trial.cov
         z = before_mu[:3] + factor * scale * direction
-        assert trial.update_pose(observation(list(z), information), gate_probability=0.99) is fused
+        obs = observation(list(z), information)
+        assert trial.update_pose(obs, weight=weight, gate_probability=0.99) is fused
         assert trial.rejected_poses == (0 if fused else 1)
         if not fused:
             np.testing.assert_array_equal(trial.mean, before_mu)
             np.testing.assert_array_equal(trial.cov, before_cov)
 
 
+def test_the_heading_stays_wrapped_across_pi() -> None:
+    """From 3.10 rad, an observation at -3.10 rad (0.08 rad further on, across pi) turns the
+    heading on through pi: it comes out in [-pi, pi), as the wrapped closed form."""
+    slam = EkfSlam(EkfSlamConfig(initial_pose_std=(0.1, 0.1, 0.3)), [0.0, 0.0, 3.10])
+    mu, sigma = slam.mean, slam.cov
+    assert slam.update_pose(observation([0.0, 0.0, -3.10], FULL))
+    expected, _ = closed_form(mu, sigma, np.array([0.0, 0.0, -3.10]), FULL)
+    assert -math.pi <= slam.mean[2] < math.pi
+    assert expected[2] > math.pi  # the closed form's own heading went past pi
+    assert abs(slam.mean[2] - wrap_angle(expected[2])) < 1e-10
+
+
 def test_an_observation_without_information_is_not_fused() -> None:
     slam = mapped_slam()
-    before = slam.mean
-    assert not slam.update_pose(observation([9.0, 9.0, 0.0], np.zeros((3, 3))))
-    np.testing.assert_array_equal(slam.mean, before)
+    before_mu, before_cov = slam.mean, slam.cov
+    assert not slam.update_pose(
+        observation([9.0, 9.0, 0.0], np.zeros((3, 3))), gate_probability=0.99
+    )
+    np.testing.assert_array_equal(slam.mean, before_mu)
+    np.testing.assert_array_equal(slam.cov, before_cov)
+    assert slam.rejected_poses == 0  # not fused, and not refused either
 
 
 @pytest.mark.parametrize(
@@ -160,6 +183,9 @@ def test_an_observation_without_information_is_not_fused() -> None:
         ({"weight": 1.5}, ValueError, "weight"),
         ({"weight": math.nan}, ValueError, "weight"),
         ({"gate_probability": 1.0}, ValueError, "gate_probability"),
+        ({"gate_probability": 0.0}, ValueError, "gate_probability"),
+        ({"gate_probability": math.nan}, ValueError, "gate_probability"),
+        ({"gate_probability": True}, TypeError, "gate_probability"),
         ({"gate_probability": "0.99"}, TypeError, "gate_probability"),
     ],
 )
@@ -247,16 +273,17 @@ def test_a_bad_inflation_raises_and_changes_nothing(extra: FloatArray) -> None:
     np.testing.assert_array_equal(slam.cov, before)
 
 
-def blocked_robot_heading_errors(after_refused_frames: int) -> list[float]:
+def blocked_robot_heading_errors(after_refused: int) -> tuple[list[float], int]:
     """A robot blocked in front of the centre circle whose odometry reports a turn of 3° a
-    frame for 8 s that never happens; no pole on the field. Heading errors (rad) per frame."""
+    frame for 8 s that never happens; no pole on the field. Heading errors (rad) per frame,
+    and the provider's inflations."""
     config = PipelineConfig(
         self_pose="ekf_slam_field_features",
         pole_sightings="oracle",
         field_features="oracle",
         feature_view=FeatureViewConfig(point_std_m=0.01, point_std_per_m=0.01),
         field_fusion=FieldFusionConfig(
-            observation_weight=0.1, after_refused_frames=after_refused_frames
+            observation_weight=0.1, after_refused_observations=after_refused
         ),
     )
     context = PerceptionContext(CameraModel(), (), PoleGeometry())
@@ -277,17 +304,20 @@ def blocked_robot_heading_errors(after_refused_frames: int) -> list[float]:
         )
         pose = pipeline.step(sensed)[SELF_POSE].pose
         errors.append(abs(float(wrap_angle(pose[2] - truth[2]))))
-    return errors
+    provider = pipeline.provider(SELF_POSE)
+    assert isinstance(provider, EkfSlamFieldPose)
+    return errors, provider.inflations
 
 
 def test_a_blocked_robot_comes_back_when_refusals_inflate_the_pose() -> None:
     """The odometry claims 240° of turning. Never inflating, the gate ends up refusing every
     field observation and the heading follows the odometry; inflating after 8 refusals in a
     row brings it back each time it runs off (3° a frame, so by a saw tooth of about 25°)."""
-    never = blocked_robot_heading_errors(0)
-    inflated = blocked_robot_heading_errors(8)
-    assert never[-1] > math.radians(90.0)
+    never, none = blocked_robot_heading_errors(0)
+    inflated, inflations = blocked_robot_heading_errors(8)
+    assert never[-1] > math.radians(90.0) and none == 0
     assert max(inflated) < math.radians(30.0) and np.mean(inflated) < math.radians(15.0)
+    assert inflations >= 3  # once per run-off
 
 
 @pytest.mark.parametrize(
@@ -296,8 +326,8 @@ def test_a_blocked_robot_comes_back_when_refusals_inflate_the_pose() -> None:
         ("observation_weight", 0.0, ValueError),
         ("observation_weight", 1.2, ValueError),
         ("gate_probability", 1.0, ValueError),
-        ("after_refused_frames", -1, ValueError),
-        ("after_refused_frames", 2.5, TypeError),
+        ("after_refused_observations", -1, ValueError),
+        ("after_refused_observations", 2.5, TypeError),
     ],
 )
 def test_bad_fusion_config_raises_naming_the_field(
@@ -305,3 +335,64 @@ def test_bad_fusion_config_raises_naming_the_field(
 ) -> None:
     with pytest.raises(error, match=f"FieldFusionConfig.{field}"):
         FieldFusionConfig(**{field: value})  # type: ignore[arg-type]
+
+
+def fusing_provider() -> EkfSlamFieldPose:
+    """The fused provider with the default FieldFusionConfig, reset at the origin."""
+    context = PerceptionContext(CameraModel(), (), PoleGeometry())
+    provider = EkfSlamFieldPose(
+        EkfSlamConfig(initial_pose_std=(0.02, 0.02, 0.02)),
+        PipelineConfig().sensor_model,
+        FieldFusionConfig(),
+        context,
+    )
+    provider.reset(Prior(pose=np.zeros(3), rng=np.random.default_rng(0)))
+    return provider
+
+
+def test_refusals_count_in_a_row_and_the_eighth_inflates() -> None:
+    """Observations 0.5 rad off a filter sure of its heading to 0.02 rad are refused. Seven,
+    one that is fused (which ends the run), seven more: no inflation yet; the eighth in a row
+    inflates the pose and is fused, the heading going (nearly) all the way. Seven refused
+    after it (further off still) do not inflate again: the count started over."""
+    provider = fusing_provider()
+    slam = provider.slam
+    far, near = observation([0.0, 0.0, 0.5], FULL), observation([0.0, 0.0, 0.0], FULL)
+    for obs in [far] * 7 + [near] + [far] * 7:
+        provider._fuse(obs)
+    assert provider.inflations == 0 and slam.rejected_poses == 14
+    provider._fuse(far)
+    assert provider.inflations == 1 and abs(slam.mean[2] - 0.5) < 0.05
+    farther = observation([0.0, 0.0, 1.5], FULL)
+    for _ in range(7):
+        provider._fuse(farther)
+    assert provider.inflations == 1 and slam.rejected_poses == 22
+    provider.reset(Prior(pose=np.zeros(3), rng=np.random.default_rng(0)))
+    assert provider.inflations == 0 and provider.slam.rejected_poses == 0
+
+
+def test_an_observation_without_information_leaves_the_run_of_refusals() -> None:
+    provider = fusing_provider()
+    far, empty = observation([0.0, 0.0, 0.5], FULL), observation([5.0, 5.0, 0.0], np.zeros((3, 3)))
+    for obs in [far] * 7 + [empty]:
+        provider._fuse(obs)
+    assert provider.inflations == 0
+    provider._fuse(far)  # the eighth refused in a row
+    assert provider.inflations == 1
+
+
+def test_the_inflation_adds_nothing_along_a_seen_line() -> None:
+    """A single line's observations, 0.3 rad off and 2 m off along the line: the inflation
+    follows the disagreement where the line informs (across it and the heading), so the
+    covariance along the line grows no more than the inflation's own (zero) share there."""
+    provider = fusing_provider()
+    slam = provider.slam
+    z = np.array([0.0, 0.0, 0.3]) + 2.0 * _u
+    far = observation(list(z), LINE)
+    for _ in range(7):
+        provider._fuse(far)
+    before = slam.cov[:3, :3]
+    provider._fuse(far)
+    assert provider.inflations == 1
+    along = float(_u @ slam.cov[:3, :3] @ _u)
+    assert along <= float(_u @ before @ _u) + 1e-12

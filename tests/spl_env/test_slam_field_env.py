@@ -7,7 +7,11 @@ import gymnasium as gym
 import pytest
 from gymnasium.utils.env_checker import check_env
 
+import spl_env  # noqa: F401  (registers the env ids)
 from perception.field.features import FEATURE_KINDS
+from perception.providers.slam import EkfSlamFieldPose
+from perception.representations import SELF_POSE
+from perception.slam import EkfSlam
 
 FUSED = {"camera_mode": "geometric", "frontend": "colour", "self_pose": "ekf_slam_field_features"}
 
@@ -19,11 +23,26 @@ def test_check_env_passes_with_the_fused_pose(env_id: str) -> None:
     env.close()
 
 
-def test_the_observation_holds_the_pole_map_and_the_field_features_clock() -> None:
-    env = gym.make("SPL/ActiveVision-v1", episode_s=1.0, **FUSED)
+def test_the_observation_holds_the_pole_map_and_the_field_features_clock(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The env builds the fused provider, whose pose updates happen and are fused."""
+    results: list[bool] = []
+    update_pose = EkfSlam.update_pose
+
+    def counted(self: EkfSlam, *args: object, **kwargs: object) -> bool:
+        fused = update_pose(self, *args, **kwargs)  # type: ignore[arg-type]
+        results.append(fused)
+        return fused
+
+    monkeypatch.setattr(EkfSlam, "update_pose", counted)
+    env = gym.make("SPL/ActiveVision-v1", episode_s=2.0, **FUSED)
     obs, _ = env.reset(seed=0)
+    assert isinstance(env.unwrapped.pipeline.provider(SELF_POSE), EkfSlamFieldPose)
     assert any(key.startswith("landmarks_") for key in obs)
     assert obs["field_features_since_seen"].shape == (len(FEATURE_KINDS),)
-    _, _, _, _, info = env.step(env.action_space.sample())
+    for _ in range(20):
+        _, _, _, _, info = env.step(env.action_space.sample())
     assert "field_features" in info["perception"]
+    assert sum(results) >= 5  # most frames see the field's lines
     env.close()
