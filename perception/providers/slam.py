@@ -9,7 +9,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from perception.field.pose_observation import PoseObservation, whitened_measurement
+from perception.estimation.kalman import wrapped_residual
+from perception.field.pose_observation import PoseObservation
 from perception.field.sensor_model import SensorModelConfig, observe_pose
 from perception.providers.base import PerceptionContext, Provider
 from perception.representations import FIELD_FEATURES, ODOMETRY, POLE_SIGHTINGS, SELF_POSE, Prior
@@ -49,6 +50,9 @@ class EkfSlamProvider(Provider):
         slam.predict(inputs[ODOMETRY].delta)
         slam.update(inputs[POLE_SIGHTINGS])
         return slam.estimate()
+
+
+_HEADING = (2,)  # index of the angle in a pose (x, y, theta)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -99,9 +103,10 @@ class EkfSlamFieldPose(EkfSlamProvider):
     grow with the error, so its gate comes to refuse the very observations that would correct
     it. When the gate has refused ``fusion.after_refused_observations`` field observations in a
     row, the pose block of the covariance grows by ``e e^T``, ``e`` (3,) the residual of the
-    frame's observation from the SLAM pose in the directions the observation informs (the
-    disagreement, in its own direction: a single line adds nothing along itself), and that
-    observation is fused at once, ungated. Nothing checks that the refused observations agree
+    frame's observation from the SLAM pose (the disagreement, in its own direction), and that
+    observation is fused at once, ungated. (``e`` with its part along directions the
+    observation does not inform projected out measured worse on the striker's tuning seeds
+    0-39: mean pose error 0.117 against 0.064 m.) Nothing checks that the refused observations agree
     with one another: a wrong match the sensor model makes eight times in a row is taken, and
     the poles must pull the pose back.
     """
@@ -154,8 +159,7 @@ class EkfSlamFieldPose(EkfSlamProvider):
         self._refused += 1
         limit = fusion.after_refused_observations
         if limit and self._refused >= limit:
-            y, H, _ = whitened_measurement(observation, slam.mean[:3], fusion.observation_weight)
-            e = np.linalg.pinv(H, hermitian=True) @ y  # the residual where it informs
+            e = wrapped_residual(observation.pose, slam.mean[:3], _HEADING)
             slam.inflate_pose(np.outer(e, e))
             slam.update_pose(observation, weight=fusion.observation_weight)
             self._refused = 0

@@ -381,18 +381,29 @@ def test_an_observation_without_information_leaves_the_run_of_refusals() -> None
     assert provider.inflations == 1
 
 
-def test_the_inflation_adds_nothing_along_a_seen_line() -> None:
-    """A single line's observations, 0.3 rad off and 2 m off along the line: the inflation
-    follows the disagreement where the line informs (across it and the heading), so the
-    covariance along the line grows no more than the inflation's own (zero) share there."""
+def test_the_inflation_is_the_outer_product_of_the_disagreement(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The eighth refused observation in a row inflates the pose block by ``e e^T``, ``e``
+    the observation's residual from the SLAM pose (heading wrapped across pi)."""
     provider = fusing_provider()
     slam = provider.slam
-    z = np.array([0.0, 0.0, 0.3]) + 2.0 * _u
-    far = observation(list(z), LINE)
-    for _ in range(7):
+    slam.inflate_pose(np.diag([0.0, 0.0, 9.0]))  # let the heading go anywhere ...
+    slam.update_pose(observation([0.0, 0.0, 3.1], FULL))  # ... and put it near pi
+    seen: list[FloatArray] = []
+    inflate = EkfSlam.inflate_pose
+
+    def spy(self: EkfSlam, extra_cov: FloatArray) -> None:
+        seen.append(np.array(extra_cov))
+        inflate(self, extra_cov)
+
+    monkeypatch.setattr(EkfSlam, "inflate_pose", spy)
+    far = observation([0.3, -0.2, -2.9], FULL)  # 0.28 rad on across pi
+    for _ in range(8):
+        pose = slam.mean[:3]
         provider._fuse(far)
-    before = slam.cov[:3, :3]
-    provider._fuse(far)
-    assert provider.inflations == 1
-    along = float(_u @ slam.cov[:3, :3] @ _u)
-    assert along <= float(_u @ before @ _u) + 1e-12
+    assert len(seen) == 1
+    e = np.array([0.3, -0.2, -2.9]) - pose
+    e[2] = math.remainder(e[2], math.tau)
+    assert abs(e[2]) < 0.5
+    np.testing.assert_allclose(seen[0], np.outer(e, e), atol=1e-12)
