@@ -445,9 +445,7 @@ class EkfSlam:
             if not within_gate(y, S, self._pose_gates[key]):
                 self._rejected_poses += 1
                 return False
-        mu, self._sigma = joseph_update(self._mu, self._sigma, y, H, _WHITE, _POSE, S=S)
-        mu[2] = wrap_angle(mu[2])
-        self._mu = mu
+        self._apply(y, H, _WHITE, _POSE, S)
         return True
 
     def inflate_pose(self, extra_cov: ArrayLike) -> None:
@@ -523,11 +521,18 @@ class EkfSlam:
         if not self._passes_gate(y, S):
             self._rejected += 1
             return False
-        # Joseph form with the sparse H, O(n^2); Q is the measurement covariance (the kernel's R)
-        mu, self._sigma = joseph_update(self._mu, self._sigma, y, H, Q, index, S=S)
+        self._apply(y, H, Q, index, S)  # Q is the measurement covariance (the kernel's R)
+        return True
+
+    def _apply(
+        self, y: FloatArray, H: FloatArray, R: FloatArray, index: ArrayLike, S: FloatArray
+    ) -> None:
+        """The Joseph-form correction with innovation ``y``, the nonzero block ``H`` of the
+        measurement Jacobian at state ``index``, measurement covariance ``R`` and ``S``
+        (sparse H: O(n^2)); the heading wrapped."""
+        mu, self._sigma = joseph_update(self._mu, self._sigma, y, H, R, index, S=S)
         mu[2] = wrap_angle(mu[2])
         self._mu = mu
-        return True
 
     def _sight_unmapped(self, landmark_id: int, z: FloatArray, Q: FloatArray) -> bool:
         """Buffer a sighting of an unmapped landmark; add it at the ``min_views``-th in place.
