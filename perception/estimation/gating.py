@@ -9,6 +9,8 @@ are unitless.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -24,6 +26,13 @@ def chi2_threshold(probability: float, dof: int) -> float:
     """
     check_probability("", "probability", probability)
     check_int("", "dof", dof, 1)
+    return _chi2_quantile(float(probability), int(dof))
+
+
+@functools.lru_cache(maxsize=256)
+def _chi2_quantile(probability: float, dof: int) -> float:
+    """:func:`chi2_threshold` of checked arguments, computed once per pair (filters that gate
+    with a varying number of degrees of freedom ask for it every frame)."""
     from scipy.stats import chi2  # ~0.7 s to import: paid only by users of a chi-square gate
 
     return float(chi2.ppf(probability, dof))

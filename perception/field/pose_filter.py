@@ -157,7 +157,6 @@ class PoseFilter:
             raise TypeError(f"config must be a PoseFilterConfig, got {type(config).__name__}")
         self._config = config
         self._odometry = config.odometry_model()
-        self._thresholds: dict[int, float] = {}  # rank of L -> gate threshold, computed once
         self._x = _pose(initial_pose, "initial_pose")
         self._P = config.initial_cov
         self._rejected = 0
@@ -229,9 +228,7 @@ class PoseFilter:
         probability = self._config.gate_probability
         if probability is None:
             return math.inf
-        if dof not in self._thresholds:
-            self._thresholds[int(dof)] = chi2_threshold(probability, int(dof))
-        return self._thresholds[int(dof)]
+        return chi2_threshold(probability, int(dof))
 
     def update(self, observation: PoseObservation) -> bool:
         """Fuse a pose observation in information form; return whether it was fused.

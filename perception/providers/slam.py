@@ -46,10 +46,14 @@ class EkfSlamProvider(Provider):
         self._slam = EkfSlam(self.config, prior.pose)
 
     def update(self, inputs: Mapping[str, Any], time_s: float) -> SlamEstimate:
+        self._predict_and_sight(inputs)
+        return self.slam.estimate()
+
+    def _predict_and_sight(self, inputs: Mapping[str, Any]) -> None:
+        """Predict with the frame's odometry increment, then fuse its pole sightings."""
         slam = self.slam
         slam.predict(inputs[ODOMETRY].delta)
         slam.update(inputs[POLE_SIGHTINGS])
-        return slam.estimate()
 
 
 _HEADING = (2,)  # index of the angle in a pose (x, y, theta)
@@ -106,9 +110,9 @@ class EkfSlamFieldPose(EkfSlamProvider):
     frame's observation from the SLAM pose (the disagreement, in its own direction), and that
     observation is fused at once, ungated. (``e`` with its part along directions the
     observation does not inform projected out measured worse on the striker's tuning seeds
-    0-39: mean pose error 0.117 against 0.064 m.) Nothing checks that the refused observations agree
-    with one another: a wrong match the sensor model makes eight times in a row is taken, and
-    the poles must pull the pose back.
+    0-39: mean pose error 0.117 against 0.064 m.) Nothing checks that the refused observations
+    agree with one another: a wrong match the sensor model makes eight times in a row is taken,
+    and the poles must pull the pose back.
     """
 
     requires = (ODOMETRY, POLE_SIGHTINGS, FIELD_FEATURES)
@@ -132,10 +136,8 @@ class EkfSlamFieldPose(EkfSlamProvider):
         self._refused = self.inflations = 0
 
     def update(self, inputs: Mapping[str, Any], time_s: float) -> SlamEstimate:
-        slam = self.slam
-        slam.predict(inputs[ODOMETRY].delta)
-        slam.update(inputs[POLE_SIGHTINGS])
-        features = inputs[FIELD_FEATURES]
+        self._predict_and_sight(inputs)
+        slam, features = self.slam, inputs[FIELD_FEATURES]
         if features:
             result = observe_pose(features, slam.mean[:3], self.field_map, self.model)
             if result.observation is not None:

@@ -74,6 +74,7 @@ from perception.validation import (
     check_finite,
     check_int,
     check_positive,
+    check_probability,
     finite_vector,
     is_finite_real,
 )
@@ -299,7 +300,6 @@ class EkfSlam:
         self._G = np.eye(3)  # G of the latest predict
         self._rejected = 0
         self._rejected_poses = 0
-        self._pose_gates: dict[tuple[float, int], float] = {}  # (p, dof) -> chi-square quantile
 
     @property
     def config(self) -> EkfSlamConfig:
@@ -433,18 +433,16 @@ class EkfSlam:
         """
         check_positive("update_pose", "weight", weight, upper=1.0, upper_inclusive=True)
         if gate_probability is not None:
-            check_positive("update_pose", "gate_probability", gate_probability, upper=1.0)
+            check_probability("update_pose", "gate_probability", gate_probability)
         y, H, rank = whitened_measurement(observation, self._mu[:3], float(weight))
         if rank == 0:
             return False
         S = innovation_covariance(self._sigma, H, _WHITE, _POSE)
-        if gate_probability is not None:
-            key = (float(gate_probability), rank)
-            if key not in self._pose_gates:
-                self._pose_gates[key] = chi2_threshold(*key)
-            if not within_gate(y, S, self._pose_gates[key]):
-                self._rejected_poses += 1
-                return False
+        if gate_probability is not None and not within_gate(
+            y, S, chi2_threshold(gate_probability, rank)
+        ):
+            self._rejected_poses += 1
+            return False
         self._apply(y, H, _WHITE, _POSE, S)
         return True
 
