@@ -4,6 +4,7 @@ fused in (``self_pose="ekf_slam_field_features"``)."""
 from __future__ import annotations
 
 import gymnasium as gym
+import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
@@ -46,3 +47,36 @@ def test_the_observation_holds_the_pole_map_and_the_field_features_clock(
     assert "field_features" in info["perception"]
     assert sum(results) >= 5  # most frames see the field's lines
     env.close()
+
+
+@pytest.mark.parametrize("mode", ["sync", "async"])
+def test_gymnasium_make_vec_runs_the_fused_pose(mode: str) -> None:
+    envs = gym.make_vec(
+        "SPL/Striker-v0", num_envs=2, vectorization_mode=mode, episode_s=1.0, **FUSED
+    )
+    try:
+        obs, _ = envs.reset(seed=[1, 2])
+        assert envs.observation_space.contains(obs)
+        for _ in range(12):  # past the 1 s episode: the sub-envs reset themselves
+            obs, rewards, _, _, info = envs.step(envs.action_space.sample())
+            assert envs.observation_space.contains(obs) and np.isfinite(rewards).all()
+            assert info["perception"]["pose"].shape == (2, 3)
+    finally:
+        envs.close()
+
+
+def test_stable_baselines3_vec_env_runs_the_fused_pose() -> None:
+    from stable_baselines3.common.vec_env import SubprocVecEnv
+
+    def make() -> gym.Env:
+        return gym.make("SPL/Striker-v0", episode_s=1.0, **FUSED)
+
+    envs = SubprocVecEnv([make, make], start_method="fork")
+    try:
+        envs.seed(3)
+        envs.reset()
+        for _ in range(12):
+            _, rewards, _, infos = envs.step(np.stack([envs.action_space.sample()] * 2))
+            assert np.isfinite(rewards).all() and len(infos) == 2
+    finally:
+        envs.close()
