@@ -181,6 +181,31 @@ def test_linkages_match_their_definitions(seed, n):
         assert members.mean() == pytest.approx(mean)
 
 
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), objects=st.integers(1, 5), per_object=st.integers(1, 8))
+def test_clusters_equal_one_scipy_linkage_over_all_echoes(seed, objects, per_object):
+    """Echoes of a few objects (some runs wider than the cut-off, some gaps narrower): the
+    clustering, which takes each run between wide gaps alone, equals SciPy's over them all."""
+    from scipy.cluster.hierarchy import fcluster, linkage
+
+    rng = np.random.default_rng(seed)
+    x = np.repeat(rng.uniform(0.3, 1.5, objects), per_object)
+    x = x + rng.normal(0.0, 0.025, len(x))
+    cutoff = 0.05
+    for method in LINKAGES:
+        means, counts = cluster_ranges(x, cutoff_m=cutoff, method=method)
+        xs = np.sort(x)
+        if len(xs) < 2:
+            labels = np.zeros(len(xs), dtype=np.intp)
+        else:
+            Z = linkage(xs[:, None], method=method)
+            labels = fcluster(Z, t=cutoff + 1e-9, criterion="distance") - 1
+        expected = np.bincount(labels, weights=xs) / np.bincount(labels)
+        order = np.argsort(expected)
+        assert means == pytest.approx(expected[order], abs=1e-12), method
+        assert counts.tolist() == np.bincount(labels)[order].tolist(), method
+
+
 def test_noisy_echoes_of_one_static_object_give_one_accurate_observation():
     rng = np.random.default_rng(4)
     f = SonarFilter()
