@@ -308,13 +308,17 @@ def best_splits(carpet: BoolImage) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
     height, width = carpet.shape
     # (W + 1, H + 1) integral image of the columns: carpet above each row, summed over columns
     summed = cv2.integral(transposed(carpet).view(np.uint8))
-    above = np.diff(summed, axis=0)  # (W, H + 1): carpet of each column above each row
-    # carpet less the rest from row r down is 2 (above[H] - above[r]) - (H - r): the column's
-    # constant 2 above[H] - H plus r - 2 above[r], whose argmax (the first of equals) it shares
-    key = np.arange(height, dtype=above.dtype) - 2 * above[:, :-1]  # (W, H)
-    best = np.argmax(key, axis=1)
-    score = 2 * (above[:, -1] - above[np.arange(width), best]) - (height - best)
-    return best, score.astype(above.dtype)
+    # carpet less the rest from row r down is 2 (above[H] - above[r]) - (H - r), with above[r]
+    # the column's carpet above row r: the column's constant 2 above[H] - H plus the key
+    # r - 2 above[r], whose argmax (the first of equals) it shares. Worked in place: a frame's
+    # fresh (W, H) temporaries cost more in page faults than in arithmetic.
+    key = summed[:-1]  # (W, H + 1), becoming -2 above, then the key in its first H columns
+    np.subtract(key, summed[1:], out=key)
+    key *= 2
+    key[:, :-1] += np.arange(height, dtype=key.dtype)
+    best = np.argmax(key[:, :-1], axis=1)
+    score = key[np.arange(width), best] - key[:, -1] - height  # key[H] is -2 above[H]
+    return best, score
 
 
 def carpet_top(carpet: BoolImage) -> FloatArray:
