@@ -258,7 +258,9 @@ def test_a_start_per_candidate_finds_the_pose_or_its_twin_from_anywhere() -> Non
     # the seed's single start from the prior fails from far enough
     far = twin(TRUTH) + np.array([0.0, 0.0, 1.5])
     single = observe_pose(features, far, FIELD, CONFIG)
-    assert single.observation is None or np.abs(pose_error(single.pose, TRUTH)).max() > 0.1
+    if single.observation is not None:  # refused, or settled on neither of the two fits
+        for fit in (TRUTH, twin(TRUTH)):
+            assert np.abs(pose_error(single.pose, fit)).max() > 0.1
 
 
 def test_a_missing_field_map_is_a_type_error_naming_it() -> None:

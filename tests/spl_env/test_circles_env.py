@@ -239,7 +239,7 @@ def test_braitenberg_keeps_the_robot_off_the_walls() -> None:
     env.close()
 
 
-def test_render_draws_the_room(office: OfficeEnv) -> None:
+def test_render_draws_the_room() -> None:
     env = OfficeEnv(episode_s=1.0, render_mode="rgb_array")
     env.reset(seed=0)
     image = env.render()

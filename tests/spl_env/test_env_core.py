@@ -361,9 +361,20 @@ def test_another_robot_rig_senses_its_own_head_and_surroundings() -> None:
         assert np.all((heard >= model.min_range_m) & (heard <= model.max_range_m))
     middle = sonar[1][~np.isnan(sonar[1])]
     assert len(middle) >= 1 and 0.2 < middle[0] < 0.6, sonar
-    # a step's odometry is the increment plus small errors
-    delta = rig.sense(core.world, 1.6, np.array([0.02, 0.0, 0.0]), 0.0, rng, render=False)[0]
-    np.testing.assert_allclose(delta.odometry_delta, [0.02, 0.0, 0.0], atol=0.02)
+    # a step's odometry is the increment, scaled by the episode's drawn error, plus noise of
+    # the configured std (0.03 m per sqrt(m) on each of dx, dy; 0.07 rad per sqrt(m) on the
+    # heading): within 5 std of that, and far from nothing or twice the step
+    step_m = 0.3
+    delta = rig.sense(core.world, 1.6, np.array([step_m, 0.0, 0.0]), 0.0, rng, render=False)[0]
+    errors, odometry = rig.odometry.errors, core.config.sensors.odometry
+    xy_std = odometry.translation_noise_m_per_sqrt_m * math.sqrt(step_m)
+    expected_x = (1.0 + errors.translation_scale_error) * step_m
+    assert abs(delta.odometry_delta[0] - expected_x) < 5 * xy_std
+    assert abs(delta.odometry_delta[1]) < 5 * xy_std
+    theta_std = odometry.heading_noise_rad_per_sqrt_m * math.sqrt(step_m)
+    expected_theta = errors.heading_drift_rad_per_m * step_m
+    assert abs(delta.odometry_delta[2] - expected_theta) < 5 * theta_std
+    assert 5 * xy_std < 0.5 * step_m  # the band excludes a missing or a doubled step
     env.close()
 
 

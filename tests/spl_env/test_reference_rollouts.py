@@ -1,4 +1,9 @@
-"""``SPL/ActiveVision-v0`` reproduces rollouts recorded before the env was reshaped onto the core.
+"""A change detector: ``SPL/ActiveVision-v0`` reproduces recorded rollouts bit for bit.
+
+Not evidence of correctness (the reference is a run of this code, recorded again whenever a
+deliberate change moved it; the independent checks of rewards, geometry and NEES live in the
+other tests): it catches any change to the step loop, the sensors or the perception that was
+meant to leave rollouts alone.
 
 ``reference/active_vision_v0_reference.npz`` was written by this module's :func:`main`
 (``python tests/spl_env/test_reference_rollouts.py PATH``) at the commit before the reshaping
@@ -59,7 +64,7 @@ def rollout(kwargs: dict[str, Any], actions: np.ndarray) -> dict[str, np.ndarray
 
 
 @pytest.mark.parametrize("case", sorted(CASES))
-def test_rollout_matches_the_reference_recorded_before_the_reshaping(case: str) -> None:
+def test_rollout_matches_the_recorded_reference(case: str) -> None:
     ref = np.load(REFERENCE)
     got = rollout(CASES[case], ref[f"{case}__actions"])
     for name, values in got.items():

@@ -21,19 +21,39 @@ def test_spectators_walk_their_lane_and_turn_back_at_its_ends() -> None:
     carpet_l, carpet_w = config.dimensions.carpet_size_m
     half_l = carpet_l / 2 + config.board_distance_m / 2
     half_w = carpet_w / 2 + config.board_distance_m / 2
+    dt = 0.1
     before = spectators.positions
-    spectators.move(0.1)
-    step = np.linalg.norm(spectators.positions - before, axis=1)
-    assert np.all(step <= 1.2 * 1.2 * 0.1 + 1e-12) and np.all(step >= 0.8 * 1.2 * 0.1 - 1e-12)
+    spectators.move(dt)
+    first = spectators.positions - before
+    speed = np.linalg.norm(first, axis=1) / dt  # each one's own, within the spread
+    assert np.all(speed <= 1.2 * 1.2 + 1e-9) and np.all(speed >= 0.8 * 1.2 - 1e-9)
+    # the lane's axis and half-length of each: a long side runs along x at |y| = half_w
+    on_long = np.isclose(np.abs(before[:, 1]), half_w)
+    assert np.all(on_long | np.isclose(np.abs(before[:, 0]), half_l))
+    axis = np.where(on_long, 0, 1)
+    half = np.where(on_long, half_l, half_w)
+    rows = np.arange(len(speed))
+    along = spectators.positions[rows, axis]
+    turns = np.zeros(len(speed), dtype=int)
     for _ in range(300):  # 30 s: every spectator reaches an end of its side and turns
-        spectators.move(0.1)
+        spectators.move(dt)
         xy = spectators.positions
-        on_long_side = np.isclose(np.abs(xy[:, 1]), half_w)
-        on_short_side = np.isclose(np.abs(xy[:, 0]), half_l)
-        assert np.all(on_long_side | on_short_side)  # in the strip, between carpet and boards
-        assert np.all(np.abs(xy[:, 0]) <= half_l + 1e-9) and np.all(
-            np.abs(xy[:, 1]) <= half_w + 1e-9
-        )
+        across = xy[rows, 1 - axis]  # the lane stays put, between carpet and boards
+        np.testing.assert_allclose(np.abs(across), np.where(on_long, half_w, half_l))
+        now = xy[rows, axis]
+        moved = now - along
+        at_end = np.isclose(np.abs(along), half)
+        # from an end: back inward by a whole step; elsewhere: a whole step, or a part of one
+        # that ends at the end
+        inward = at_end & (np.sign(moved) == -np.sign(along))
+        np.testing.assert_array_equal(inward, at_end)
+        whole = np.isclose(np.abs(moved), speed * dt)
+        clipped = np.isclose(np.abs(now), half) & (np.abs(moved) < speed * dt)
+        assert np.all(whole | clipped), (moved, speed * dt)
+        assert np.all(np.abs(now) <= half + 1e-9)
+        turns += at_end
+        along = now
+    assert np.all(turns >= 1)
     # the bodies follow
     np.testing.assert_allclose(world.position(spectators.names[0])[:2], spectators.positions[0])
     world.close()

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 from pettingzoo.test import parallel_api_test, parallel_seed_test
 
+from perception.geometry import range_bearing, wrap_angle
 from perception.types import SensorFrame
 from spl_env import NO_POLES_KWARGS, team_v0
 from spl_env.envs.team import TeamEnv, mirror_observation
@@ -174,12 +175,31 @@ def test_seeds_start_episodes_and_reseeding_repeats_them(env: TeamEnv) -> None:
 
 
 def test_every_player_perceives_on_its_own(env: TeamEnv) -> None:
-    """Each player's belief follows its own robot: after a second of standing (its head
-    glancing round for poles) its believed pose lies within 0.3 m and 0.15 rad of its true
-    pose, nearer to it than to any other robot; the beliefs all differ."""
+    """Each player sees from its own robot: every pole it sights over a second of standing
+    (its head glancing round) lies at the range and bearing of the pole's true position from
+    its own true pose, not from another robot's; its believed pose lies within 0.3 m and
+    0.15 rad of its true pose, nearer to it than to any other robot; the beliefs all differ."""
     env.reset(seed=5)
+    sighted = dict.fromkeys(env.possible_agents, 0)
     for _ in range(10):
         *_, infos = env.step(stand(env))
+        poses = env.world_state.poses
+        for k, agent in enumerate(env.possible_agents):
+            seen = infos[agent]["perception"]["sighted"]
+            if not seen.any():
+                continue
+            sightings = infos[agent]["perception"]["sightings"][seen]
+            poles = infos[agent]["ground_truth"]["landmarks"][seen]
+            for j, pose in enumerate(poses):
+                expected = range_bearing(pose, poles)
+                off = np.abs(wrap_angle(sightings[:, 1] - expected[:, 1]))
+                if j == k:  # the geometric camera's fitted noise: mrad of bearing, ranges less sure
+                    assert np.all(off < 0.02), (agent, off)
+                    assert np.all(np.abs(sightings[:, 0] / expected[:, 0] - 1.0) < 0.2)
+                else:
+                    assert np.any(off > 0.1), (agent, j)
+            sighted[agent] += len(sightings)
+    assert all(count >= 1 for count in sighted.values()), sighted
     poses = env.world_state.poses
     beliefs = []
     for k, agent in enumerate(env.possible_agents):
