@@ -377,6 +377,7 @@ class PerceptionPipeline:
         while later:
             resolve(later.pop(0))
         self.frame_inputs = frozenset(inputs)  # the SensorFrame fields the providers read
+        self._frame_input_order = tuple(sorted(inputs))  # read in this order: errors repeat
         self.emulated = frozenset(reached)  # the emulated representations it reads
 
     @property
@@ -401,7 +402,7 @@ class PerceptionPipeline:
     def step(self, frame: SensorFrame) -> PerceptionOutput:
         """Run every provider once on ``frame``; ValueError if it lacks an input they read."""
         values: dict[str, Any] = {}
-        for name in self.frame_inputs:
+        for name in self._frame_input_order:
             value = getattr(frame, name)
             if value is None:
                 readers = [r for r, p in self._providers.items() if name in p.requires]

@@ -307,7 +307,7 @@ def best_splits(carpet: BoolImage) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
     non-carpet pixels from it down, and that count (W,) each."""
     height, width = carpet.shape
     # (W + 1, H + 1) integral image of the columns: carpet above each row, summed over columns
-    summed = cv2.integral(transposed(carpet).view(np.uint8))
+    summed = np.asarray(cv2.integral(transposed(carpet).view(np.uint8)), dtype=np.int32)
     # carpet less the rest from row r down is 2 (above[H] - above[r]) - (H - r), with above[r]
     # the column's carpet above row r: the column's constant 2 above[H] - H plus the key
     # r - 2 above[r], whose argmax (the first of equals) it shares. Worked in place: a frame's
@@ -315,7 +315,7 @@ def best_splits(carpet: BoolImage) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
     key = summed[:-1]  # (W, H + 1), becoming -2 above, then the key in its first H columns
     np.subtract(key, summed[1:], out=key)
     key *= 2
-    key[:, :-1] += np.arange(height, dtype=key.dtype)
+    key[:, :-1] += np.arange(height, dtype=np.int32)
     best = np.argmax(key[:, :-1], axis=1)
     score = key[np.arange(width), best] - key[:, -1] - height  # key[H] is -2 above[H]
     return best, score

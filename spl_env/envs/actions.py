@@ -22,7 +22,12 @@ def checked_action(
     numbers, objects); ValueError for a wrong shape, a value that is not finite or one further
     outside the box.
     """
-    values = np.asarray(action)
+    try:
+        values = np.asarray(action)
+    except ValueError as error:  # ragged nesting: numpy's own words name no argument
+        raise ValueError(
+            f"{name} must be an array of shape {low.shape}, got {action!r} ({error})"
+        ) from None
     if values.dtype.kind not in "iuf":
         raise TypeError(
             f"{name} must be an array of real numbers, got {type(action).__name__} of "

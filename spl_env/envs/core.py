@@ -20,7 +20,7 @@ from __future__ import annotations
 import dataclasses
 import time
 from abc import abstractmethod
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from typing import Any, ClassVar, Generic, Protocol, TypeVar
 
 import gymnasium as gym
@@ -55,12 +55,17 @@ from spl_env.observations.base import (
 )
 from spl_env.observations.circles import CircleMapEncoder
 from spl_env.observations.field_features import FieldFeatureEncoder
+from spl_env.observations.robots import RobotTracksEncoder
 from spl_env.overrides import apply_overrides
 from spl_env.rendering import TopDownView, draw_detections, side_by_side
 from spl_env.robots.nao import NaoCommand, NaoRobot, kick_intent
 from spl_env.scenes.spl_field import SplFieldScene
-from spl_env.sensors.emulation.registry import emulators_for
-from spl_env.sensors.rig import SONAR_FIELDS, NaoRig
+from spl_env.sensors.emulation.registry import (
+    EMULATORS,
+    emulated_representations,
+    emulators_for,
+)
+from spl_env.sensors.rig import LASER_FIELDS, SONAR_FIELDS, NaoRig
 from spl_env.sim.placement import Placement
 from spl_env.sim.world import BulletWorld
 from spl_env.tasks.base import Task, TaskContext
@@ -313,11 +318,42 @@ def check_camera_mode(config: EnvConfig, pipeline: PerceptionPipeline) -> None:
     readers = [
         name for name in pipeline.representations if "image" in pipeline.provider(name).requires
     ]
+    emulated = ", ".join(f"{r}={p!r}" for r, p in EMULATORS)
+    hint = "pass frontend='colour' with it, " if POLE_SIGHTINGS in readers else ""
     raise ValueError(
         "camera_mode='geometric' renders no image, but the providers of "
-        f"{readers} read images and have no emulator; the geometric mode emulates "
-        "the colour front end: pass frontend='colour' with it (or camera_mode='rendered')"
+        f"{readers} read images and have no emulator; {hint}choose providers the geometric "
+        f"mode emulates ({emulated}) or camera_mode='rendered'"
     )
+
+
+def check_sensors(config: EnvConfig, pipeline: PerceptionPipeline) -> None:
+    """ValueError when a provider reads a sensor (the laser, the sonar) that the rig's
+    configuration switches off."""
+    for sensor, fields in (("laser", LASER_FIELDS), ("sonar", SONAR_FIELDS)):
+        if getattr(config.sensors, sensor) is not None or not pipeline.frame_inputs & fields:
+            continue
+        readers = [
+            name
+            for name in pipeline.representations
+            if fields & set(pipeline.provider(name).requires)
+        ]
+        raise ValueError(
+            f"the providers of {readers} read the {sensor}, but {sensor}=None: pass "
+            f"{sensor}={{}} (the default {sensor}) or choose providers that do not read it"
+        )
+
+
+def check_track_rows(config: EnvConfig, encoders: Iterable[ObservationEncoder]) -> None:
+    """ValueError when an observation asks for more robot-track rows than the tracker ever
+    keeps tracks (the rows past them would always be empty)."""
+    tracks = config.perception.robot_tracker.max_tracks
+    for encoder in encoders:
+        if isinstance(encoder, RobotTracksEncoder) and encoder.max_robots > tracks:
+            raise ValueError(
+                f"task.max_tracked_robots must be <= perception.robot_tracker.max_tracks "
+                f"({tracks}; rows past it are always empty), got {encoder.max_robots}"
+            )
 
 
 def field_world_state(
@@ -393,14 +429,18 @@ class SplEnv(RobotEnv[WorldState]):
             self.encoders += (CircleMapEncoder(cfg.observed_circles),)
         if cfg.perception.self_pose in FIELD_FEATURE_POSES:
             self.encoders += (FieldFeatureEncoder(),)
-        emulators = emulators_for(self.scene, self.robots, cfg.sensors, cfg.perception)
         requires = {name for encoder in self.encoders for name in encoder.requires}
         outputs = perception_outputs(cfg, requires | set(self.task.reward_requires()))
         self.perception_context = perception_context(cfg, self.scene)
         self.pipeline = PerceptionPipeline(
-            cfg.perception, self.perception_context, sorted(outputs), emulated=tuple(emulators)
+            cfg.perception,
+            self.perception_context,
+            sorted(outputs),
+            emulated=emulated_representations(cfg.sensors, cfg.perception),
         )
         check_camera_mode(cfg, self.pipeline)
+        check_sensors(cfg, self.pipeline)
+        check_track_rows(cfg, self.encoders)
         rendered = cfg.sensors.camera_mode == "rendered"
         self._render_image = rendered and "image" in self.pipeline.frame_inputs
         # the bottom camera is rendered only for a provider that reads it
@@ -411,11 +451,10 @@ class SplEnv(RobotEnv[WorldState]):
         sensors = (
             cfg.sensors if read & SONAR_FIELDS else dataclasses.replace(cfg.sensors, sonar=None)
         )
-        self.rig = NaoRig(
-            sensors,
-            self.robots[AGENT],
-            {name: emulators[name] for name in self.pipeline.emulated},
+        emulators = emulators_for(
+            self.pipeline.emulated, self.scene, self.robots, cfg.sensors, cfg.perception
         )
+        self.rig = NaoRig(sensors, self.robots[AGENT], emulators)
         self._info_layout = info_layout(cfg, self.scene)
         self._top_down = TopDownView(self.scene.dimensions)
         self._blocked = np.zeros(len(self.robots), dtype=bool)

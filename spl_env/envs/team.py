@@ -51,6 +51,8 @@ from perception.validation import check_int, check_positive
 from spl_env.envs.actions import checked_action
 from spl_env.envs.core import (
     check_camera_mode,
+    check_sensors,
+    check_track_rows,
     field_world_state,
     info_layout,
     perception_context,
@@ -78,7 +80,7 @@ from spl_env.overrides import apply_overrides
 from spl_env.rendering import SLAM_BGR, TEAM_BGR, TopDownView, draw_ellipse, draw_robot
 from spl_env.robots.nao import NaoCommand, NaoRobot, kick_intent
 from spl_env.scenes.spl_field import SplFieldScene
-from spl_env.sensors.emulation.registry import emulators_for
+from spl_env.sensors.emulation.registry import emulated_representations, emulators_for
 from spl_env.sensors.rig import SONAR_FIELDS, NaoRig
 from spl_env.sim.placement import Placement
 from spl_env.sim.world import BulletWorld
@@ -305,20 +307,23 @@ class TeamEnv(ParallelEnv[str, dict[str, np.ndarray], np.ndarray]):
         outputs = perception_outputs(cfg, requires)
         context = perception_context(cfg, self.scene)  # shared: the CNN is loaded once
         self.players: list[Player] = []
+        emulable = emulated_representations(cfg.sensors, cfg.perception)
         for name, robot in zip(names, robots, strict=True):
-            emulators = emulators_for(self.scene, robots, cfg.sensors, cfg.perception)
-            pipeline = PerceptionPipeline(
-                cfg.perception, context, sorted(outputs), emulated=tuple(emulators)
-            )
+            pipeline = PerceptionPipeline(cfg.perception, context, sorted(outputs), emulable)
             # a rig measures no sonar that neither perception nor an encoder reads (the
             # geometric mode emulates the robot sightings' sonar check from the sonar's model)
             read = pipeline.frame_inputs | frame_reads(encoders[robot.team])
             sensors = (
                 cfg.sensors if read & SONAR_FIELDS else dataclasses.replace(cfg.sensors, sonar=None)
             )
-            rig = NaoRig(sensors, robot, {r: emulators[r] for r in pipeline.emulated})
+            emulators = emulators_for(
+                pipeline.emulated, self.scene, robots, cfg.sensors, cfg.perception
+            )
+            rig = NaoRig(sensors, robot, emulators)
             self.players.append(Player(name, robot, rig, pipeline, encoders[robot.team]))
         check_camera_mode(cfg, self.players[0].pipeline)
+        check_sensors(cfg, self.players[0].pipeline)
+        check_track_rows(cfg, encoders[0])
         inputs = self.players[0].pipeline.frame_inputs
         rendered = cfg.sensors.camera_mode == "rendered"
         self._render_image = rendered and "image" in inputs
@@ -519,7 +524,7 @@ class TeamEnv(ParallelEnv[str, dict[str, np.ndarray], np.ndarray]):
             raise TypeError(
                 f"actions must be a dict of agent name to action, got {type(actions).__name__}"
             )
-        unknown = sorted(set(actions) - set(self.agents))
+        unknown = sorted(set(actions) - set(self.agents), key=repr)  # keys of any type
         if unknown:
             raise ValueError(f"actions for agents not in the episode: {unknown}")
         high = np.ones(self._action_size)

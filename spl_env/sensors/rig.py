@@ -62,6 +62,7 @@ class RigConfig:
 
 
 SONAR_FIELDS = frozenset({"sonar", "sonar_model"})  # the SensorFrame fields the sonar fills
+LASER_FIELDS = frozenset({"laser", "laser_model"})  # ... and those the laser fills
 
 
 class Emulator(Protocol):

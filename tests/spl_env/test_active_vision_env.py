@@ -215,6 +215,7 @@ def test_close_twice(env: gym.Env) -> None:
         (np.array([np.nan, 0.0], dtype=np.float32), "finite"),
         (np.array([1.5, 0.0], dtype=np.float32), r"\[-1, 1\]"),
         (np.zeros(3, dtype=np.float32), "shape"),
+        ([[0.0], 0.0], r"action must be an array of shape \(2,\)"),  # ragged nesting
     ],
 )
 def test_bad_actions_raise(env: gym.Env, action: np.ndarray, match: str) -> None:

@@ -406,6 +406,54 @@ def test_the_geometric_mode_refuses_an_image_reader_without_emulator(
         gym.make("SPL/ActiveVision-v0", **overrides)
 
 
+@pytest.mark.parametrize(
+    "overrides",
+    [{"perception.odometry": "visual"}, {"robot_frontend": "vision_only"}],
+)
+def test_the_geometric_refusal_offers_what_would_help(overrides: dict[str, Any]) -> None:
+    """The colour front end is already there: the message names the emulated providers and
+    does not suggest it again."""
+    with pytest.raises(ValueError, match="renders no image") as refused:
+        gym.make("SPL/ActiveVision-v1", camera_mode="geometric", frontend="colour", **overrides)
+    assert "frontend='colour'" not in str(refused.value)
+    assert "robot_sightings='vision'" in str(refused.value)
+
+
+def test_the_geometric_mode_builds_no_emulator_the_env_does_not_read() -> None:
+    """ActiveVision-v0 tracks no robots: without a sonar it runs in the geometric mode, as in
+    the rendered one (the robot sightings' emulator, which needs the sonar, is not built)."""
+    env = gym.make("SPL/ActiveVision-v0", camera_mode="geometric", frontend="colour", sonar=None)
+    assert sorted(env.unwrapped.rig.emulators) == ["pole_sightings"]
+    env.reset(seed=0)
+    env.step(np.zeros(2, dtype=np.float32))
+    env.close()
+
+
+@pytest.mark.parametrize(
+    ("overrides", "sensor", "readers"),
+    [
+        ({"self_pose": "circle_slam", "camera_mode": "geometric"}, "laser", "'self_pose'"),
+        # rendered: the geometric mode's robot emulator refuses a missing sonar itself
+        ({"sonar": None}, "sonar", "'sonar_observations', 'robot_sightings'"),
+    ],
+)
+def test_a_provider_reading_a_switched_off_sensor_is_refused_at_construction(
+    overrides: dict[str, Any], sensor: str, readers: str
+) -> None:
+    with pytest.raises(ValueError, match=rf"\[{readers}\] read the {sensor}, but {sensor}=None"):
+        gym.make("SPL/ActiveVision-v1", frontend="colour", **overrides)
+
+
+def test_more_track_rows_than_the_tracker_keeps_are_refused() -> None:
+    with pytest.raises(ValueError, match=r"task.max_tracked_robots must be <= .*max_tracks \(16"):
+        gym.make(
+            "SPL/ActiveVision-v1",
+            camera_mode="geometric",
+            frontend="colour",
+            **{"task.max_tracked_robots": 17},
+        )
+
+
 # --- the envs' keyword arguments ---------------------------------------------------------------
 
 

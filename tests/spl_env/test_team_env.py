@@ -341,6 +341,8 @@ def test_bad_actions_are_refused_naming_the_agent(env: TeamEnv) -> None:
         env.step({**stand(env), "red_0": np.full(5, 1.5)})
     with pytest.raises(ValueError, match="not in the episode"):
         env.step({**stand(env), "green_0": STAND})
+    with pytest.raises(ValueError, match=r"not in the episode: \['x', 1\]"):  # keys of any type
+        env.step({**stand(env), 1: STAND, "x": STAND})
     with pytest.raises(TypeError, match="'blue_0' must be an array of real numbers"):
         env.step({**stand(env), "blue_0": "abcde"})
     with pytest.raises(TypeError, match="actions must be a dict of agent name to action, got list"):

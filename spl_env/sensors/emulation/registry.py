@@ -7,7 +7,7 @@ rendered pipeline). A provider that reads images and has no emulator cannot run 
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Collection, Mapping
 
 from perception.field.field_map import shared_field_map
 from perception.pipeline import PipelineConfig
@@ -101,15 +101,29 @@ EMULATORS: Mapping[tuple[str, str], EmulatorFactory] = {
 }
 
 
-def emulators_for(
-    scene: SplFieldScene, robots: list[NaoRobot], sensors: RigConfig, perception: PipelineConfig
-) -> dict[str, Emulator]:
-    """Representation -> emulator for every configured provider that has one, in the geometric
-    camera mode (none in the rendered mode); ``robots`` are the world's robots."""
+def emulated_representations(sensors: RigConfig, perception: PipelineConfig) -> tuple[str, ...]:
+    """The representations whose configured provider has an emulator here, in the geometric
+    camera mode (none in the rendered mode): what a pipeline may take from emulators."""
     if sensors.camera_mode != "geometric":
-        return {}
-    return {
-        representation: factory(scene, robots, sensors, perception)
-        for (representation, provider), factory in EMULATORS.items()
+        return ()
+    return tuple(
+        representation
+        for representation, provider in EMULATORS
         if perception.provider_name(representation) == provider
+    )
+
+
+def emulators_for(
+    representations: Collection[str],
+    scene: SplFieldScene,
+    robots: list[NaoRobot],
+    sensors: RigConfig,
+    perception: PipelineConfig,
+) -> dict[str, Emulator]:
+    """Representation -> emulator for each of ``representations`` (of
+    :func:`emulated_representations`; those a pipeline reads, so that one it does not read is
+    never built), in sorted order; ``robots`` are the world's robots."""
+    return {
+        name: EMULATORS[name, perception.provider_name(name)](scene, robots, sensors, perception)
+        for name in sorted(representations)
     }
