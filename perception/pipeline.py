@@ -378,6 +378,7 @@ class PerceptionPipeline:
             resolve(later.pop(0))
         self.frame_inputs = frozenset(inputs)  # the SensorFrame fields the providers read
         self._frame_input_order = tuple(sorted(inputs))  # read in this order: errors repeat
+        self._emulated_order = tuple(sorted(reached))
         self.emulated = frozenset(reached)  # the emulated representations it reads
 
     @property
@@ -408,7 +409,7 @@ class PerceptionPipeline:
                 readers = [r for r, p in self._providers.items() if name in p.requires]
                 raise ValueError(f"frame.{name} is None, but the providers of {readers} read it")
             values[name] = value
-        for name in self.emulated:
+        for name in self._emulated_order:
             if name not in frame.emulated:
                 raise ValueError(f"frame.emulated lacks {name!r}, which this pipeline emulates")
             values[name] = frame.emulated[name]
@@ -418,7 +419,7 @@ class PerceptionPipeline:
             for r in provider.requires_previous:
                 needed[PREVIOUS + r] = self._previous.get(r)
             values[name] = computed[name] = provider.update(needed, frame.time_s)
-        for name in self.emulated:
+        for name in self._emulated_order:
             computed[name] = values[name]
         self._previous = computed
         return PerceptionOutput(time_s=frame.time_s, representations=computed)

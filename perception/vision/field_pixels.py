@@ -302,7 +302,7 @@ def rows_from(first_row: FloatArray, height: int) -> BoolImage:
     return np.asarray(np.arange(height, dtype=np.int16)[:, None] >= first[None, :])
 
 
-def best_splits(carpet: BoolImage) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+def best_splits(carpet: BoolImage) -> tuple[NDArray[np.intp], NDArray[np.int32]]:
     """Per column of ``carpet`` (H, W), the first row that maximises the count of carpet less
     non-carpet pixels from it down, and that count (W,) each."""
     height, width = carpet.shape

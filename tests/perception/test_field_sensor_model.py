@@ -258,9 +258,9 @@ def test_a_start_per_candidate_finds_the_pose_or_its_twin_from_anywhere() -> Non
     # the seed's single start from the prior fails from far enough
     far = twin(TRUTH) + np.array([0.0, 0.0, 1.5])
     single = observe_pose(features, far, FIELD, CONFIG)
-    if single.observation is not None:  # refused, or settled on neither of the two fits
-        for fit in (TRUTH, twin(TRUTH)):
-            assert np.abs(pose_error(single.pose, fit)).max() > 0.1
+    assert single.observation is None  # refused: the error says the match is inconsistent
+    for fit in (TRUTH, twin(TRUTH)):  # where it stopped is neither of the two fits
+        assert np.abs(pose_error(single.pose, fit)).max() > 0.1
 
 
 def test_a_missing_field_map_is_a_type_error_naming_it() -> None:

@@ -328,6 +328,20 @@ def test_truncated_after_the_episode_and_info_keeps_its_shapes(env: TeamEnv) -> 
     assert all(truncated.values()) and env.agents == []
 
 
+@pytest.mark.parametrize(
+    ("overrides", "match"),
+    [
+        ({"self_pose": "circle_slam"}, r"\['self_pose'\] read the laser, but laser=None"),
+        ({"task.max_tracked_robots": 17}, r"task.max_tracked_robots must be <= .*\(16"),
+    ],
+)
+def test_a_team_config_that_cannot_run_is_refused_at_construction(
+    overrides: dict[str, Any], match: str
+) -> None:
+    with pytest.raises(ValueError, match=match):
+        team_v0.parallel_env(**FAST, **overrides)
+
+
 def test_bad_actions_are_refused_naming_the_agent(env: TeamEnv) -> None:
     env.reset(seed=0)
     nan = {**stand(env), "red_1": np.array([0, np.nan, 0, 0, 0], dtype=np.float32)}
