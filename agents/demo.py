@@ -1,7 +1,9 @@
-"""The demo episode: one minute of ``SPL/ActiveVision-v0`` with the scripted head scan.
+"""The demo episode: one minute of ``SPL/ActiveVision-v0`` with the scripted head scan (or
+of the env and policy given, as in ``agents.evaluate``).
 
     python -m agents.demo --out outputs/demo
     python -m agents.demo --out outputs/demo_short --set episode_s=10 body_behaviour=square
+    python -m agents.demo --out outputs/demo_kick --env SPL/Striker-v0
 
 Writes ``frames.png`` (a strip of rendered views: top-down truth and belief beside the camera
 image with detections), ``trajectory.png`` and ``metrics.json`` to ``--out``.
@@ -14,16 +16,14 @@ import json
 from pathlib import Path
 
 import cv2
-import gymnasium as gym
 import numpy as np
 
 import spl_env  # noqa: F401  (registers the env ids)
 from agents.evaluate import (
+    add_env_and_policy_arguments,
     add_overrides_argument,
-    env_kwargs_for,
     episode_metrics,
-    load_policy,
-    parse_overrides,
+    prepare_run,
     run_episode,
     trajectory_plot,
 )
@@ -47,28 +47,27 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    parser.add_argument("--out", type=Path, default=Path("outputs/demo"))
-    parser.add_argument("--policy", default="scan", help="a baseline name or a model .zip")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--frames", type=int, default=6, help="views in the strip")
+    parser.add_argument(
+        "--out", type=Path, default=Path("outputs/demo"), help="folder for the outputs"
+    )
+    add_env_and_policy_arguments(parser)
+    parser.add_argument("--seed", type=int, default=0, help="the episode's reset seed (>= 0)")
+    parser.add_argument(
+        "--frames", type=int, default=6, help="views in the strip, spread over the episode"
+    )
     add_overrides_argument(parser)
     args = parser.parse_args(argv)
     if args.frames < 1:
         parser.error(f"--frames must be >= 1, got {args.frames}")
-    env = gym.make(
-        "SPL/ActiveVision-v0",
-        render_mode="rgb_array",
-        **env_kwargs_for(args.policy, parse_overrides(args.set)),
+    if args.seed < 0:
+        parser.error(f"--seed must be >= 0, got {args.seed}")
+    env, policy, _, _ = prepare_run(
+        parser, args.env, args.policy, args.set, args.out, render_mode="rgb_array"
     )
     steps = env.get_wrapper_attr("config").max_steps
-    record = run_episode(
-        env,
-        load_policy(args.policy, env.get_wrapper_attr("config")),
-        seed=args.seed,
-        frame_every=max(1, steps // args.frames),
-    )
-    args.out.mkdir(parents=True, exist_ok=True)
-    cv2.imwrite(str(args.out / "frames.png"), frame_strip(record.frames[: args.frames]))
+    frames = min(args.frames, steps)  # at most one view a step
+    record = run_episode(env, policy, seed=args.seed, frame_every=max(1, steps // frames))
+    cv2.imwrite(str(args.out / "frames.png"), frame_strip(record.frames[:frames]))
     cv2.imwrite(
         str(args.out / "trajectory.png"),
         trajectory_plot(env.get_wrapper_attr("config").scene.dimensions, record),

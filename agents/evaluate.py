@@ -33,7 +33,7 @@ import json
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any, NamedTuple, Protocol
 
 import cv2
 import gymnasium as gym
@@ -51,6 +51,8 @@ from perception.metrics import landmark_errors, pose_nees, position_error
 from spl_env.config import EnvConfig
 from spl_env.field import FieldDimensions
 from spl_env.rendering import ODOM_BGR, SLAM_BGR, TRUE_BGR, TopDownView
+from spl_env.tasks.goalie import GoalieTaskConfig
+from spl_env.tasks.head_control import HeadControlTaskConfig
 from spl_env.tasks.robot_awareness import RobotAwarenessTaskConfig, awareness_share
 from spl_env.tasks.soccer import SoccerTaskConfig
 
@@ -140,15 +142,33 @@ def model_files(spec: str) -> tuple[Path, Path | None] | None:
     return None
 
 
-def load_policy(spec: str, config: EnvConfig) -> Policy:
+def load_policy(
+    spec: str, config: EnvConfig, observation_space: spaces.Space | None = None
+) -> Policy:
     """A baseline by name (a head's, :data:`agents.baselines.BASELINES`, or a soccer
     player's, :data:`agents.soccer_baselines.SOCCER_BASELINES`) for an env built from
     ``config`` (the env's ``config_class``, e.g.
     :class:`spl_env.envs.active_vision.ActiveVisionConfig`), a shipped model
-    (``pretrained:<name>``) or an SB3 PPO ``.zip``."""
+    (``pretrained:<name>``) or an SB3 PPO ``.zip``.
+
+    ValueError for a baseline of the other kind than the env (a head policy on a soccer env,
+    a soccer player on a head env or on one whose head is in the action) and, given the env's
+    ``observation_space``, for a model trained on other observations."""
     if spec in BASELINES:
+        if not isinstance(config.task, HeadControlTaskConfig):
+            raise ValueError(
+                f"policy {spec!r} moves the head, but this env ({type(config.task).__name__}) "
+                f"takes another action: pick one of {sorted(SOCCER_BASELINES)} or a model"
+            )
         return BASELINES[spec].from_config(config)
     if spec in SOCCER_BASELINES:
+        if not isinstance(config.task, SoccerTaskConfig) or config.task.head_control == "action":
+            raise ValueError(
+                f"policy {spec!r} plays soccer with a scripted head, but this env "
+                f"({type(config.task).__name__}) takes another action: pick one of "
+                f"{sorted(BASELINES)} for a head env, or a soccer env without "
+                "head_control='action'"
+            )
         return SOCCER_BASELINES[spec].from_config(config)
     files = model_files(spec)
     if files is None:
@@ -160,9 +180,49 @@ def load_policy(spec: str, config: EnvConfig) -> Policy:
     from stable_baselines3 import PPO
 
     model = PPO.load(files[0], device="cpu")
+    policy: Policy = model
+    expected = observation_space
     if isinstance(model.action_space, spaces.Discrete):  # trained on options (ours, the Zoo's)
-        return OptionPolicy(model, option_primitives(model.observation_space, config))
-    return model
+        primitives = option_primitives(model.observation_space, config)
+        policy = OptionPolicy(model, primitives)
+        if isinstance(observation_space, spaces.Dict):
+            expected = primitives.observation_space(observation_space)
+    if expected is not None:
+        check_observation_space(spec, model.observation_space, expected)
+    return policy
+
+
+def check_observation_space(spec: str, trained: spaces.Space, env: spaces.Space) -> None:
+    """ValueError naming them when the observations the model ``spec`` was trained on
+    (``trained``) and the env's (``env``) differ in their keys or shapes (a v0 model on a v1
+    env, one trained with other overrides): SB3 reads every key of an observation."""
+    if isinstance(trained, spaces.Dict) and isinstance(env, spaces.Dict):
+        missing = sorted(set(trained.spaces) - set(env.spaces))
+        extra = sorted(set(env.spaces) - set(trained.spaces))
+        shaped = sorted(
+            k
+            for k in set(trained.spaces) & set(env.spaces)
+            if trained.spaces[k].shape != env.spaces[k].shape
+        )
+    else:
+        missing, extra = [], []
+        shaped = [] if trained.shape == env.shape else ["the observation"]
+    if missing or extra or shaped:
+        raise ValueError(
+            f"policy {spec!r} was trained on other observations than this env gives (keys the "
+            f"env lacks: {missing}; keys the model never saw: {extra}; of another shape: "
+            f"{shaped}): evaluate it on the env and overrides it was trained on"
+        )
+
+
+def default_policy(config: EnvConfig) -> str:
+    """The scripted policy an env plays when none is named: the goalie in a goal, the
+    centre-kicking striker in the other soccer envs, the head scan elsewhere."""
+    if isinstance(config.task, GoalieTaskConfig):
+        return "goalie"
+    if isinstance(config.task, SoccerTaskConfig):
+        return "centre_kick"
+    return "scan"
 
 
 def option_primitives(observation_space: spaces.Space, config: EnvConfig) -> Primitives:
@@ -191,7 +251,10 @@ def training_config(spec: str) -> dict[str, Any]:
     files = model_files(spec)
     if files is None or files[1] is None:
         return {}
-    config = json.loads(files[1].read_text())
+    try:
+        config = json.loads(files[1].read_text())
+    except json.JSONDecodeError as error:
+        raise ValueError(f"{files[1]} is not valid JSON: {error}") from None
     if not isinstance(config, dict) or not isinstance(config.get("env_kwargs"), dict):
         raise ValueError(f"{files[1]} has no 'env_kwargs' object: not a training config")
     return config
@@ -289,6 +352,23 @@ def summarise(per_episode: list[dict[str, float | None]]) -> dict[str, float | N
     return out
 
 
+def add_env_and_policy_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--env`` and ``--policy`` on ``parser``, as :func:`prepare_run` reads them."""
+    parser.add_argument(
+        "--env",
+        default=None,
+        help=f"env id (default: the model's, else {DEFAULT_ENV_ID}); "
+        "python -c 'import gymnasium, spl_env; print(list(gymnasium.registry))' lists them",
+    )
+    parser.add_argument(
+        "--policy",
+        default=None,
+        help=f"{sorted(BASELINES)} (head envs), {sorted(SOCCER_BASELINES)} (soccer envs), "
+        f"pretrained:<name> ({pretrained_names()}) or a model .zip; default: the goalie in "
+        "SPL/Goalie-v0, the centre kick in the other soccer envs, the head scan elsewhere",
+    )
+
+
 def add_overrides_argument(parser: argparse.ArgumentParser) -> None:
     """``--set KEY=VALUE ...`` on ``parser`` (several after one ``--set``, or ``--set`` again):
     env config overrides, read by :func:`parse_overrides`."""
@@ -304,12 +384,15 @@ def add_overrides_argument(parser: argparse.ArgumentParser) -> None:
 
 
 def parse_overrides(pairs: list[str]) -> dict[str, Any]:
-    """``key=value`` strings to env kwargs; values are JSON (numbers, strings in quotes, true)."""
+    """``key=value`` strings to env kwargs; values are JSON (numbers, strings in quotes, true),
+    else the string. ValueError for a pair without ``=``, an empty key or a key set twice."""
     out: dict[str, Any] = {}
     for pair in pairs:
         key, sep, value = pair.partition("=")
-        if not sep:
+        if not sep or not key:
             raise ValueError(f"--set takes key=value, got {pair!r}")
+        if key in out:
+            raise ValueError(f"--set gives {key!r} twice")
         try:
             out[key] = json.loads(value)
         except json.JSONDecodeError:
@@ -317,47 +400,81 @@ def parse_overrides(pairs: list[str]) -> dict[str, Any]:
     return out
 
 
-def env_kwargs_for(policy: str, overrides: dict[str, Any]) -> dict[str, Any]:
+USER_ERRORS = (ValueError, TypeError, OSError, gym.error.Error)  # what a bad argument raises
+DEFAULT_ENV_ID = "SPL/ActiveVision-v0"
+
+
+class PreparedRun(NamedTuple):
+    """A command-line run's env and policy, with the env id and policy spec they came from."""
+
+    env: gym.Env
+    policy: Policy
+    env_id: str
+    policy_spec: str
+
+
+def prepare_run(
+    parser: argparse.ArgumentParser,
+    env_id: str | None,
+    policy_spec: str | None,
+    overrides: list[str],
+    out: Path,
+    render_mode: str | None = None,
+) -> PreparedRun:
+    """The env and the policy of a command-line run, and its output folder made. The env is
+    ``env_id``, else the model's (its training config's ``env_id``), else
+    :data:`DEFAULT_ENV_ID`; the policy ``policy_spec``, else the env's
+    :func:`default_policy`. A mistake in them (an unknown env id, policy or config key, a bad
+    value, a policy that does not fit the env, a folder that cannot be made) ends the run
+    with ``parser.error`` and its message, one line, before any episode."""
+    try:
+        saved = training_config(policy_spec) if policy_spec else {}
+        env_id = env_id or saved.get("env_id", DEFAULT_ENV_ID)
+        env = gym.make(
+            env_id,
+            render_mode=render_mode,
+            **env_kwargs_for(policy_spec, parse_overrides(overrides)),
+        )
+        config = env.get_wrapper_attr("config")
+        spec = policy_spec or default_policy(config)
+        policy = load_policy(spec, config, env.observation_space)
+        out.mkdir(parents=True, exist_ok=True)
+    except USER_ERRORS as error:
+        parser.error(str(error))
+    return PreparedRun(env, policy, env_id, spec)
+
+
+def env_kwargs_for(policy: str | None, overrides: dict[str, Any]) -> dict[str, Any]:
     """Env kwargs to evaluate ``policy`` with: the ``env_kwargs`` of the training config saved
     with its model (if there is one; :func:`training_config`), updated by ``overrides``."""
-    return {**training_config(policy).get("env_kwargs", {}), **overrides}
+    saved = training_config(policy) if policy else {}
+    return {**saved.get("env_kwargs", {}), **overrides}
 
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    parser.add_argument(
-        "--env", default=None, help="env id (default: the model's, else SPL/ActiveVision-v0)"
-    )
-    parser.add_argument(
-        "--policy",
-        default="scan",
-        help=f"{sorted(BASELINES)} (head), {sorted(SOCCER_BASELINES)} (soccer), "
-        f"pretrained:<name> ({pretrained_names()}) or a model .zip",
-    )
+    add_env_and_policy_arguments(parser)
     parser.add_argument(
         "--video", action="store_true", help="also write the first episode as episode.mp4"
     )
-    parser.add_argument("--episodes", type=int, default=3)
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--out", type=Path, default=Path("outputs/eval"))
+    parser.add_argument("--episodes", type=int, default=3, help="episodes to play (>= 1)")
+    parser.add_argument(
+        "--seed", type=int, default=0, help="episode k is reset with seed + k (>= 0)"
+    )
+    parser.add_argument(
+        "--out", type=Path, default=Path("outputs/eval"), help="folder for the outputs"
+    )
     add_overrides_argument(parser)
     args = parser.parse_args(argv)
     if args.episodes < 1:
         parser.error(f"--episodes must be >= 1, got {args.episodes}")
-    try:
-        saved = training_config(args.policy)
-    except ValueError as error:
-        parser.error(str(error))
-    env_id = args.env or saved.get("env_id", "SPL/ActiveVision-v0")
-    env = gym.make(
-        env_id,
-        render_mode="rgb_array" if args.video else None,
-        **env_kwargs_for(args.policy, parse_overrides(args.set)),
+    if args.seed < 0:
+        parser.error(f"--seed must be >= 0, got {args.seed}")
+    env, policy, env_id, spec = prepare_run(
+        parser, args.env, args.policy, args.set, args.out, "rgb_array" if args.video else None
     )
-    policy = load_policy(args.policy, env.get_wrapper_attr("config"))
-    args.out.mkdir(parents=True, exist_ok=True)
     per_episode = []
     for k in range(args.episodes):
         record = run_episode(
@@ -379,7 +496,7 @@ def main(argv: list[str] | None = None) -> None:
     env.close()
     result = {
         "env": env_id,
-        "policy": args.policy,
+        "policy": spec,
         "episodes": per_episode,
         "mean": summarise(per_episode),
     }

@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -87,13 +88,18 @@ def plot(
 
 
 def parse_baselines(pairs: list[str]) -> dict[str, float]:
-    """``NAME=VALUE`` strings to a dict of floats."""
+    """``NAME=VALUE`` strings to a dict of finite floats; ValueError naming the pair
+    otherwise."""
     out: dict[str, float] = {}
     for pair in pairs:
         name, sep, value = pair.partition("=")
-        if not sep:
-            raise ValueError(f"--baseline takes NAME=VALUE, got {pair!r}")
-        out[name] = float(value)
+        try:
+            number = float(value)
+        except ValueError:
+            number = math.nan
+        if not sep or not name or not math.isfinite(number):
+            raise ValueError(f"--baseline takes NAME=VALUE with a finite VALUE, got {pair!r}")
+        out[name] = number
     return out
 
 
@@ -102,12 +108,28 @@ def main(argv: list[str] | None = None) -> None:
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument("runs", nargs="+", type=Path, help="run folders of agents.train")
-    parser.add_argument("--out", type=Path, required=True, help="PNG to write")
-    parser.add_argument("--title", default="")
-    parser.add_argument("--window", type=int, default=10)
-    parser.add_argument("--baseline", nargs="*", default=[], metavar="NAME=VALUE")
+    parser.add_argument("--out", type=Path, required=True, help="PNG to write (.png)")
+    parser.add_argument("--title", default="", help="the plot's title")
+    parser.add_argument(
+        "--window", type=int, default=10, help="episodes in each moving mean (>= 1)"
+    )
+    parser.add_argument(
+        "--baseline",
+        nargs="*",
+        default=[],
+        metavar="NAME=VALUE",
+        help="dashed reference lines, e.g. scan=-249",
+    )
     args = parser.parse_args(argv)
-    print(plot(args.runs, args.out, args.title, args.window, parse_baselines(args.baseline)))
+    if args.window < 1:
+        parser.error(f"--window must be >= 1, got {args.window}")
+    if args.out.suffix.lower() != ".png":
+        parser.error(f"--out must name a .png file, got {str(args.out)!r}")
+    try:
+        written = plot(args.runs, args.out, args.title, args.window, parse_baselines(args.baseline))
+    except (ValueError, OSError) as error:
+        parser.error(str(error))
+    print(written)
 
 
 if __name__ == "__main__":

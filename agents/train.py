@@ -32,7 +32,7 @@ from typing import Any
 import gymnasium as gym
 
 import spl_env  # registers the env ids
-from agents.evaluate import add_overrides_argument, parse_overrides
+from agents.evaluate import USER_ERRORS, add_overrides_argument, parse_overrides
 from agents.head_options import HeadOptions
 from agents.imitation import WarmStartConfig, imitate, record_teacher
 from agents.options import OptionsWrapper
@@ -61,8 +61,12 @@ def default_config_path(env_id: str) -> Path:
 
 
 def load_config(path: Path) -> dict[str, Any]:
-    """Read a training config (JSON; :func:`check_config`)."""
-    config = json.loads(path.read_text())
+    """Read a training config (JSON; :func:`check_config`); ValueError naming ``path`` when it
+    is not valid JSON."""
+    try:
+        config = json.loads(path.read_text())
+    except json.JSONDecodeError as error:
+        raise ValueError(f"training config {path} is not valid JSON: {error}") from None
     check_config(config, f"training config {path}")
     return config
 
@@ -122,6 +126,7 @@ def train(
     if timesteps < 1:
         raise ValueError(f"timesteps must be >= 1, got {timesteps}")
     check_config(config)
+    out.mkdir(parents=True, exist_ok=True)
     n_envs, options = config.get("n_envs", 1), config.get("options")
     # the envs take the cores: a second torch thread only spins against them (a 2-core
     # machine ran 3x slower with torch's default threads beside busy env workers)
@@ -157,7 +162,7 @@ def train(
             teacher_env.close()
             resolved["warm_start_losses"] = imitate(model, demos, warm, seed)
         model.learn(total_timesteps=timesteps, progress_bar=progress_bar)
-        out.mkdir(parents=True, exist_ok=True)
+        resolved["timesteps_trained"] = model.num_timesteps  # whole rollouts: n_steps x n_envs
         model.save(out / "model.zip")
         (out / "config.json").write_text(json.dumps(resolved, indent=2))
     finally:
@@ -170,17 +175,43 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    parser.add_argument("--env", default="SPL/ActiveVision-v0")
+    parser.add_argument(
+        "--env",
+        default="SPL/ActiveVision-v0",
+        help="env id; its shipped training config is agents/configs/<id with / as _>.json",
+    )
     parser.add_argument("--config", type=Path, default=None, help="training config JSON")
-    parser.add_argument("--timesteps", type=int, default=20_000)
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--out", type=Path, default=Path("runs/ppo_active_vision"))
+    parser.add_argument(
+        "--timesteps",
+        type=int,
+        default=20_000,
+        help="env steps to train (>= 1; PPO trains whole rollouts of n_steps x n_envs)",
+    )
+    parser.add_argument("--seed", type=int, default=0, help="PPO's and the envs' seed (>= 0)")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=Path("runs/ppo_active_vision"),
+        help="folder for model.zip, config.json and monitor/",
+    )
     parser.add_argument("--progress-bar", action="store_true", help="needs the 'train' extra")
     parser.add_argument("--tensorboard", type=Path, default=None, help="log dir; needs tensorboard")
     add_overrides_argument(parser)
     args = parser.parse_args(argv)
-    config = load_config(args.config or default_config_path(args.env))
-    config["env_kwargs"] = {**config["env_kwargs"], **parse_overrides(args.set)}
+    if args.timesteps < 1:
+        parser.error(f"--timesteps must be >= 1, got {args.timesteps}")
+    if args.seed < 0:
+        parser.error(f"--seed must be >= 0, got {args.seed}")
+    try:
+        if args.env not in gym.registry:
+            raise ValueError(f"no env {args.env!r} is registered")
+        config = load_config(args.config or default_config_path(args.env))
+        config["env_kwargs"] = {**config["env_kwargs"], **parse_overrides(args.set)}
+        # one env here first: a config mistake is told in one line, not by the workers
+        make_training_env(args.env, config["env_kwargs"], config.get("options")).close()
+        args.out.mkdir(parents=True, exist_ok=True)
+    except USER_ERRORS as error:
+        parser.error(str(error))
     path = train(
         args.env, config, args.timesteps, args.out, args.seed, args.progress_bar, args.tensorboard
     )

@@ -18,16 +18,21 @@ from agents.evaluate import episode_metrics, load_policy, run_episode
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--episode-s", type=float, default=30.0)
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--episode-s", type=float, default=30.0, help="episode length (s)")
+    parser.add_argument("--seed", type=int, default=0, help="the episode's reset seed (>= 0)")
     args = parser.parse_args(argv)
+    if args.seed < 0:
+        parser.error(f"--seed must be >= 0, got {args.seed}")
     for frontend in ("colour", "cnn"):
-        env = gym.make(
-            "SPL/ActiveVision-v0",
-            episode_s=args.episode_s,
-            randomise_lighting=True,
-            frontend=frontend,
-        )
+        try:
+            env = gym.make(
+                "SPL/ActiveVision-v0",
+                episode_s=args.episode_s,
+                randomise_lighting=True,
+                frontend=frontend,
+            )
+        except ValueError as refused:  # the episode length
+            parser.error(str(refused))
         policy = load_policy("scan", env.get_wrapper_attr("config"))
         metrics = episode_metrics(run_episode(env, policy, seed=args.seed))
         env.close()

@@ -22,13 +22,21 @@ from agents.evaluate import episode_metrics, load_policy, run_episode
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--timesteps", type=int, default=4096)
-    parser.add_argument("--episode-s", type=float, default=20.0)
-    parser.add_argument("--eval-episodes", type=int, default=2)
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--timesteps", type=int, default=4096, help="PPO env steps (>= 1)")
+    parser.add_argument("--episode-s", type=float, default=20.0, help="episode length (s)")
+    parser.add_argument(
+        "--eval-episodes", type=int, default=2, help="episodes per policy in the comparison (>= 1)"
+    )
+    parser.add_argument("--seed", type=int, default=0, help="PPO's seed")
     args = parser.parse_args(argv)
+    for name in ("timesteps", "eval_episodes"):
+        if getattr(args, name) < 1:
+            parser.error(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")
     kwargs = {"camera_mode": "geometric", "frontend": "colour", "episode_s": args.episode_s}
-    env = gym.make("SPL/ActiveVision-v0", **kwargs)
+    try:
+        env = gym.make("SPL/ActiveVision-v0", **kwargs)
+    except ValueError as refused:  # the episode length
+        parser.error(str(refused))
     model = PPO("MultiInputPolicy", env, n_steps=512, batch_size=128, seed=args.seed, device="cpu")
     model.learn(total_timesteps=args.timesteps)
     scan = load_policy("scan", env.get_wrapper_attr("config"))

@@ -12,12 +12,25 @@ env steps in parallel, then the learner (in this process) runs PPO on them. ``--
 
 from __future__ import annotations
 
-from agents.rllib.envs import STRIKER_ENV
-from agents.rllib.training import example_config, example_parser, run_example
+try:
+    from agents.rllib.envs import STRIKER_ENV
+    from agents.rllib.training import (
+        example_config,
+        example_parser,
+        parse_example_args,
+        run_example,
+    )
+except ModuleNotFoundError as missing:
+    if missing.name != "ray":
+        raise
+    raise SystemExit(
+        'this example needs Ray RLlib: pip install -c constraints.txt -e ".[ray]"'
+    ) from None
 
 
 def main(argv: list[str] | None = None) -> None:
-    args = example_parser(__doc__.split("\n")[0]).parse_args(argv)
+    parser = example_parser(__doc__.split("\n")[0])
+    args = parse_example_args(parser, argv, STRIKER_ENV)
     run_example(example_config(STRIKER_ENV, args), args)
 
 

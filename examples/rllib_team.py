@@ -13,14 +13,32 @@ policy, each robot mapped to its team's; ``--policies shared`` trains one policy
 
 from __future__ import annotations
 
-from agents.rllib.envs import TEAM_ENV
-from agents.rllib.training import example_config, example_parser, run_example, with_team_policies
+try:
+    from agents.rllib.envs import TEAM_ENV
+    from agents.rllib.training import (
+        example_config,
+        example_parser,
+        parse_example_args,
+        run_example,
+        with_team_policies,
+    )
+except ModuleNotFoundError as missing:
+    if missing.name != "ray":
+        raise
+    raise SystemExit(
+        'this example needs Ray RLlib: pip install -c constraints.txt -e ".[ray]"'
+    ) from None
 
 
 def main(argv: list[str] | None = None) -> None:
     parser = example_parser(__doc__.split("\n")[0])
-    parser.add_argument("--policies", choices=("team", "shared"), default="team")
-    args = parser.parse_args(argv)
+    parser.add_argument(
+        "--policies",
+        choices=("team", "shared"),
+        default="team",
+        help="one policy per team, or one shared by both (red's view is mirrored)",
+    )
+    args = parse_example_args(parser, argv, TEAM_ENV)
     run_example(with_team_policies(example_config(TEAM_ENV, args), args.policies), args)
 
 

@@ -28,7 +28,13 @@ from ray.rllib.utils.metrics import (
     NUM_EPISODES,
 )
 
-from agents.rllib.envs import register_envs
+from agents.rllib.envs import (
+    STRIKER_ENV,
+    TEAM_ENV,
+    make_striker_env,
+    make_team_env,
+    register_envs,
+)
 
 TEAMS: tuple[str, ...] = ("blue", "red")
 SHARED_POLICY = "shared"
@@ -138,17 +144,50 @@ def example_parser(description: str) -> argparse.ArgumentParser:
     episode length, PPO's batch, minibatch, epochs and learning rate, the seed and a
     checkpoint folder."""
     parser = argparse.ArgumentParser(description=description)
-    parser.add_argument("--iterations", type=int, default=20)
-    parser.add_argument("--env-runners", type=int, default=1, help="parallel sampling processes")
+    parser.add_argument("--iterations", type=int, default=20, help="training iterations (>= 1)")
+    parser.add_argument(
+        "--env-runners", type=int, default=1, help="parallel sampling processes (>= 0)"
+    )
     parser.add_argument("--address", default=None, help="Ray cluster address (default: local)")
-    parser.add_argument("--episode-s", type=float, default=60.0)
-    parser.add_argument("--batch", type=int, default=4000, help="env steps per iteration")
-    parser.add_argument("--minibatch", type=int, default=500)
-    parser.add_argument("--epochs", type=int, default=10)
-    parser.add_argument("--lr", type=float, default=3e-4)
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--episode-s", type=float, default=60.0, help="episode length (s)")
+    parser.add_argument("--batch", type=int, default=4000, help="env steps per iteration (>= 1)")
+    parser.add_argument(
+        "--minibatch", type=int, default=500, help="PPO minibatch (env steps, <= --batch)"
+    )
+    parser.add_argument("--epochs", type=int, default=10, help="PPO epochs per batch (>= 1)")
+    parser.add_argument("--lr", type=float, default=3e-4, help="learning rate (> 0)")
+    parser.add_argument("--seed", type=int, default=0, help="the envs' and PPO's seed (>= 0)")
     parser.add_argument("--out", type=Path, default=None, help="checkpoint folder")
     return parser
+
+
+EXAMPLE_ENVS = {STRIKER_ENV: make_striker_env, TEAM_ENV: make_team_env}
+
+
+def parse_example_args(
+    parser: argparse.ArgumentParser, argv: list[str] | None, env: str
+) -> argparse.Namespace:
+    """The arguments of :func:`example_parser`'s ``parser``, checked before Ray starts:
+    ``parser.error`` for a count below its least, a minibatch larger than the batch, a
+    learning rate that is not finite and > 0, or an episode length the env ``env`` (one of
+    :data:`EXAMPLE_ENVS`, made once here) refuses; otherwise an env runner would only report
+    it among hundreds of lines of its own log."""
+    args = parser.parse_args(argv)
+    for name, least in (("iterations", 1), ("batch", 1), ("minibatch", 1), ("epochs", 1)):
+        if getattr(args, name) < least:
+            parser.error(f"--{name} must be >= {least}, got {getattr(args, name)}")
+    for name in ("env_runners", "seed"):
+        if getattr(args, name) < 0:
+            parser.error(f"--{name.replace('_', '-')} must be >= 0, got {getattr(args, name)}")
+    if args.minibatch > args.batch:
+        parser.error(f"--minibatch must be <= --batch ({args.batch}), got {args.minibatch}")
+    if not (math.isfinite(args.lr) and args.lr > 0):
+        parser.error(f"--lr must be finite and > 0, got {args.lr}")
+    try:
+        EXAMPLE_ENVS[env]({"episode_s": args.episode_s}).close()
+    except ValueError as error:
+        parser.error(str(error))
+    return args
 
 
 def example_config(env: str, args: argparse.Namespace) -> PPOConfig:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import shutil
 from pathlib import Path
 from typing import Any
@@ -19,6 +20,7 @@ from agents.demo import main as demo_main
 from agents.evaluate import (
     EpisodeRecord,
     add_overrides_argument,
+    default_policy,
     env_kwargs_for,
     episode_metrics,
     load_policy,
@@ -27,11 +29,14 @@ from agents.evaluate import (
     summarise,
 )
 from agents.evaluate import main as evaluate_main
+from agents.learning_curves import parse_baselines
 from agents.train import check_config, default_config_path, load_config, train
+from agents.train import main as train_main
 from spl_env.envs.active_vision import ActiveVisionConfig
 from spl_env.robots.nao import head_action, head_target
 
 CONFIG = ActiveVisionConfig()
+FAST_GOALIE = {"camera_mode": "geometric", "frontend": "colour"}
 ROBOT = CONFIG.robot
 
 
@@ -220,7 +225,7 @@ def test_evaluate_writes_metrics_and_plot(tmp_path: Path) -> None:
     for key in ("return", "mean_position_error_m", "mean_odometry_error_m", "mean_pose_nees"):
         assert result["mean"][key] == pytest.approx((first[key] + second[key]) / 2)
     assert (tmp_path / "trajectory.png").stat().st_size > 0
-    with pytest.raises(ValueError, match="policy"):
+    with pytest.raises(SystemExit):  # a usage error (the message: the test of CLI mistakes)
         evaluate_main(["--policy", "nonsense", "--episodes", "1", "--out", str(tmp_path)])
 
 
@@ -294,6 +299,82 @@ def test_cli_counts_below_one_are_usage_errors(
         main([*argv, "--out", str(tmp_path)])
     assert exit_info.value.code == 2
     assert f"{flag} must be >= 1" in capsys.readouterr().err
+
+
+GEOMETRIC = ["--set", "camera_mode=geometric", "frontend=colour", "episode_s=1"]
+
+
+@pytest.mark.parametrize(
+    ("main", "argv", "message"),
+    [
+        (evaluate_main, ["--env", "SPL/Nope-v0"], "Environment `Nope` doesn't exist"),
+        (evaluate_main, ["--policy", "nope"], "policy must be one of"),
+        (evaluate_main, ["--set", "=3"], "--set takes key=value, got '=3'"),
+        (evaluate_main, [*GEOMETRIC, "episode_s=2"], "--set gives 'episode_s' twice"),
+        (evaluate_main, [*GEOMETRIC, "nosuchkey=3"], "unknown config key 'nosuchkey'"),
+        (evaluate_main, ["--seed", "-1"], "--seed must be >= 0, got -1"),
+        (evaluate_main, ["--env", "SPL/Striker-v0", "--policy", "scan"], "'scan' moves the head"),
+        (
+            evaluate_main,
+            ["--env", "SPL/ActiveVision-v1", "--policy", "centre_kick"],
+            "'centre_kick' plays soccer",
+        ),
+        (
+            evaluate_main,
+            ["--env", "SPL/ActiveVision-v0", "--policy", "pretrained:active_vision", *GEOMETRIC],
+            r"trained on other observations .*lacks: \['robots_cos_bearing'",
+        ),
+        (
+            demo_main,
+            ["--env", "SPL/ActiveVision-v0", "--policy", "pretrained:striker", *GEOMETRIC],
+            "trained on striker options; it cannot play this head env",
+        ),
+        (train_main, ["--timesteps", "0"], "--timesteps must be >= 1, got 0"),
+        (train_main, ["--env", "SPL/Nope-v0"], "no env 'SPL/Nope-v0' is registered"),
+        (train_main, ["--set", "bogus=1"], "unknown config key 'bogus'"),
+    ],
+)
+def test_cli_mistakes_end_in_one_line_before_any_episode(
+    main, argv: list[str], message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A user's mistake is a usage error (exit 2) with its message, not a traceback."""
+    with pytest.raises(SystemExit) as exit_info:
+        main([*argv, "--out", str(tmp_path / "out")])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert re.search(message, err), err
+    assert "Traceback" not in err
+
+
+def test_a_training_config_that_is_not_json_is_named(tmp_path: Path) -> None:
+    path = tmp_path / "bad.json"
+    path.write_text("{x")
+    with pytest.raises(ValueError, match=f"training config {re.escape(str(path))} is not valid"):
+        load_config(path)
+
+
+def test_a_soccer_env_plays_its_own_scripted_player_by_default(tmp_path: Path) -> None:
+    evaluate_main(
+        ["--env", "SPL/Striker-v0", "--episodes", "1", "--out", str(tmp_path), *GEOMETRIC]
+    )
+    assert json.loads((tmp_path / "metrics.json").read_text())["policy"] == "centre_kick"
+    assert default_policy(gym.make("SPL/Goalie-v0", **FAST_GOALIE).get_wrapper_attr("config")) == (
+        "goalie"
+    )
+    assert default_policy(CONFIG) == "scan"
+
+
+def test_override_pairs_are_refused_without_a_key_or_twice() -> None:
+    with pytest.raises(ValueError, match="key=value, got '=3'"):
+        parse_overrides(["=3"])
+    with pytest.raises(ValueError, match="'episode_s' twice"):
+        parse_overrides(["episode_s=3", "episode_s=4"])
+
+
+@pytest.mark.parametrize("pair", ["scan", "scan=abc", "scan=nan", "=1"])
+def test_learning_curve_baselines_must_be_finite_named_values(pair: str) -> None:
+    with pytest.raises(ValueError, match="NAME=VALUE with a finite VALUE"):
+        parse_baselines([pair])
 
 
 @pytest.mark.parametrize(

@@ -4,6 +4,7 @@ the team env's per-robot observations flatten. Skipped where ray is not installe
 from __future__ import annotations
 
 import importlib.util
+import re
 from collections.abc import Iterator
 from pathlib import Path
 from types import ModuleType
@@ -105,3 +106,24 @@ def test_rllib_team(policies: str, capsys: pytest.CaptureFixture[str]) -> None:
     assert [line.split(":")[0] for line in lines] == ["iteration 1", "iteration 2"]
     if policies == "team":  # a return per team once an episode has ended
         assert all("blue" in line and "red" in line for line in lines if " 0 episodes" not in line)
+
+
+@pytest.mark.parametrize(
+    ("example", "change", "message"),
+    [
+        ("rllib_striker", ["--iterations", "0"], "--iterations must be >= 1, got 0"),
+        ("rllib_striker", ["--batch", "0"], "--batch must be >= 1, got 0"),
+        ("rllib_striker", ["--minibatch", "256"], r"--minibatch must be <= --batch \(128\)"),
+        ("rllib_striker", ["--env-runners", "-1"], "--env-runners must be >= 0, got -1"),
+        ("rllib_striker", ["--lr", "nan"], "--lr must be finite and > 0, got nan"),
+        ("rllib_striker", ["--episode-s", "-1"], "episode_s must be finite and in"),
+        ("rllib_team", ["--episode-s", "-1"], "episode_s must be finite and in"),
+    ],
+)
+def test_bad_example_arguments_are_refused_before_ray_trains(
+    example: str, change: list[str], message: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        load(example).main([*TINY, *change])  # a later flag wins over TINY's
+    assert exit_info.value.code == 2
+    assert re.search(message, capsys.readouterr().err)
