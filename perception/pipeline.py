@@ -126,7 +126,7 @@ from perception.tracking.ball_filter import BallFilterConfig
 from perception.tracking.robot_tracker import RobotTrackerConfig
 from perception.tracking.sonar_filter import SonarFilterConfig
 from perception.types import SensorFrame
-from perception.validation import check_choice, check_in_interval
+from perception.validation import check_choice, check_finite, check_in_interval
 from perception.vision.cnn_ball import CnnBallConfig
 from perception.vision.cnn_detector import CnnDetectorConfig
 from perception.vision.cnn_robots import CnnRobotConfig
@@ -401,7 +401,11 @@ class PerceptionPipeline:
             provider.reset(Prior(pose=pose, rng=generators[name]))
 
     def step(self, frame: SensorFrame) -> PerceptionOutput:
-        """Run every provider once on ``frame``; ValueError if it lacks an input they read."""
+        """Run every provider once on ``frame``; ValueError if it lacks an input they read or
+        its time is not finite."""
+        if not isinstance(frame, SensorFrame):
+            raise TypeError(f"frame must be a SensorFrame, got {type(frame).__name__}")
+        check_finite("PerceptionPipeline.step", "frame.time_s", frame.time_s)
         values: dict[str, Any] = {}
         for name in self._frame_input_order:
             value = getattr(frame, name)

@@ -197,8 +197,9 @@ def check_covariance(
 ) -> FloatArray:
     """``matrix`` as a new float64 (size, size) array; raise unless it is a covariance.
 
-    A covariance here is finite, symmetric (entries (i, j) and (j, i) agree to a relative 1e-9)
-    and positive definite, or with ``singular_ok`` positive semidefinite (its eigenvalues may
+    A covariance here is finite, symmetric (entries (i, j) and (j, i) agree to a relative 1e-9
+    of the larger of them and of ``sqrt(C_ii C_jj)``: :func:`is_symmetric`) and positive
+    definite, or with ``singular_ok`` positive semidefinite (its eigenvalues may
     dip a relative 1e-12 below zero; the returned array is then symmetrised). Errors name the
     argument ``name``.
     """
@@ -211,7 +212,7 @@ def check_covariance(
         raise ValueError(f"{name} must be a finite ({size}, {size}) array, got {C!r}")
     if singular_ok and size == 2:  # plain floats, as below: the eigenvalues in closed form
         (a, b), (c, d) = C.tolist()
-        if abs(b - c) > _SYMMETRY_RTOL * max(abs(b), abs(c)) + _SYMMETRY_ATOL:
+        if abs(b - c) > _symmetry_tolerance(a, b, c, d):
             raise ValueError(f"{name} must be symmetric, got {C.tolist()}")
         s = 0.5 * (b + c)
         lowest = 0.5 * (a + d) - math.hypot(0.5 * (a - d), s)
@@ -219,8 +220,7 @@ def check_covariance(
             raise ValueError(f"{name} must be positive semidefinite, got {C.tolist()}")
         return np.array([[a, s], [s, d]])
     if singular_ok:
-        tolerance = _SYMMETRY_RTOL * np.maximum(np.abs(C), np.abs(C.T)) + _SYMMETRY_ATOL
-        if not (np.abs(C - C.T) <= tolerance).all():
+        if not is_symmetric(C):
             raise ValueError(f"{name} must be symmetric, got {C.tolist()}")
         C = 0.5 * (C + C.T)
         if float(np.linalg.eigvalsh(C).min()) < -_PSD_RTOL * float(np.abs(C).max()):
@@ -228,17 +228,32 @@ def check_covariance(
         return C
     if size == 2:  # plain floats: much faster than numpy for the many 2 x 2 measurement checks
         (a, b), (c, d) = C.tolist()
-        symmetric = abs(b - c) <= _SYMMETRY_RTOL * max(abs(b), abs(c)) + _SYMMETRY_ATOL
+        symmetric = abs(b - c) <= _symmetry_tolerance(a, b, c, d)
         positive = a > 0.0 and a * d - b * c > 0.0  # Sylvester's criterion
     else:
-        tolerance = _SYMMETRY_RTOL * np.maximum(np.abs(C), np.abs(C.T)) + _SYMMETRY_ATOL
-        symmetric = bool((np.abs(C - C.T) <= tolerance).all())
+        symmetric = is_symmetric(C)
         positive = symmetric and _has_cholesky(C)
     if not symmetric:
         raise ValueError(f"{name} must be symmetric, got {C.tolist()}")
     if not positive:
         raise ValueError(f"{name} must be positive definite, got {C.tolist()}")
     return C
+
+
+def is_symmetric(C: FloatArray) -> bool:
+    """Whether the square ``C`` is symmetric to rounding: entries (i, j) and (j, i) agree to a
+    relative ``_SYMMETRY_RTOL`` of the larger of them and of ``sqrt(|C_ii C_jj|)`` (an entry
+    near zero beside large variances is rounding of their scale), plus ``_SYMMETRY_ATOL``."""
+    if np.array_equal(C, C.T):  # the usual case, a symmetrised filter covariance: cheap
+        return True
+    diagonal = np.sqrt(np.abs(np.diag(C)))
+    scale = np.maximum(np.maximum(np.abs(C), np.abs(C.T)), np.outer(diagonal, diagonal))
+    return bool((np.abs(C - C.T) <= _SYMMETRY_RTOL * scale + _SYMMETRY_ATOL).all())
+
+
+def _symmetry_tolerance(a: float, b: float, c: float, d: float) -> float:
+    """:func:`is_symmetric`'s tolerance for ``|b - c|`` of the 2 x 2 ``[[a, b], [c, d]]``."""
+    return _SYMMETRY_RTOL * max(abs(b), abs(c), math.sqrt(abs(a * d))) + _SYMMETRY_ATOL
 
 
 def _has_cholesky(C: FloatArray) -> bool:

@@ -52,6 +52,7 @@ from perception.geometry import FloatArray
 from perception.types import MappedCircle
 from perception.validation import (
     check_covariance,
+    check_finite,
     check_int,
     check_positive,
     check_probability,
@@ -171,6 +172,7 @@ class CircleMapper:
         for no return) from a scanner ``mount_x_m`` ahead of the robot origin, seen from the
         believed ``pose`` (3,) (field frame) with covariance ``pose_cov`` (3, 3). Returns
         :attr:`circles`."""
+        check_finite("CircleMapper.update", "mount_x_m", mount_x_m)
         pose = finite_vector(pose, "pose", 3)
         pose_cov = check_covariance(pose_cov, "pose_cov", 3, singular_ok=True)
         scan = np.asarray(ranges, dtype=np.float64)

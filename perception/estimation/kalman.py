@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from perception.geometry import FloatArray, wrap_angle
-from perception.validation import check_covariance
+from perception.validation import check_covariance, is_symmetric
 
 
 def predict(
@@ -92,6 +92,8 @@ def joseph_update(
     m, idx = _measurement_size(len(x), H, R, index)
     _require_shape("y", y, (m,))
     _require_finite(x=x, P=P, y=y, H=H)
+    if not is_symmetric(P):  # O(n^2): a cheap part of the trust
+        raise ValueError(f"P must be symmetric, got {P.tolist()}")
     R = check_covariance(R, "R", m, singular_ok=True)
     S = check_covariance(innovation_covariance(P, H, R, idx) if S is None else S, "S", m)
 

@@ -38,13 +38,48 @@ class FieldDimensions:
 
     def __post_init__(self) -> None:
         for name, value in vars(self).items():
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise TypeError(
+                    f"FieldDimensions.{name} must be a real number, got {type(value).__name__}"
+                )
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"FieldDimensions.{name} must be finite and > 0, got {value}")
-        if self.penalty_area_width_m >= self.width_m:
-            raise ValueError(
-                "FieldDimensions.penalty_area_width_m must be < width_m, "
-                f"got {self.penalty_area_width_m} >= {self.width_m}"
-            )
+        half_length = self.half_length_m
+        # (name, its extent, what it must stay within, that bound's name): the markings fit
+        # inside the lines, one inside the other
+        for name, extent, bound, within in (
+            ("penalty_area_width_m", self.penalty_area_width_m, self.width_m, "width_m"),
+            (
+                "goal_area_width_m",
+                self.goal_area_width_m,
+                self.penalty_area_width_m,
+                "penalty_area_width_m",
+            ),
+            (
+                "goal_inner_width_m",
+                self.goal_inner_width_m,
+                self.goal_area_width_m,
+                "goal_area_width_m",
+            ),
+            ("penalty_area_length_m", self.penalty_area_length_m, half_length, "length_m / 2"),
+            (
+                "goal_area_length_m",
+                self.goal_area_length_m,
+                self.penalty_area_length_m,
+                "penalty_area_length_m",
+            ),
+            ("penalty_mark_distance_m", self.penalty_mark_distance_m, half_length, "length_m / 2"),
+            (
+                "centre_circle_diameter_m",
+                self.centre_circle_diameter_m,
+                min(self.width_m, self.length_m - 2 * self.penalty_area_length_m),
+                "min(width_m, length_m - 2 penalty_area_length_m)",
+            ),
+        ):
+            if extent >= bound:
+                raise ValueError(
+                    f"FieldDimensions.{name} must be < {within} ({bound}), got {extent}"
+                )
 
     @property
     def half_length_m(self) -> float:

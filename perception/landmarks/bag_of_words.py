@@ -97,9 +97,22 @@ def word_counts(words: ArrayLike, vocabulary: Vocabulary) -> IntArray:
 
 def tf_idf(counts: ArrayLike, document_frequency: ArrayLike, n_images: int) -> FloatArray:
     """Eq. 9 weights of count vectors ``counts`` (..., K) in a database of ``n_images`` images
-    where ``document_frequency`` (K,) images hold each word (module docstring)."""
+    where ``document_frequency`` (K,) images hold each word (module docstring). ValueError
+    unless ``n_images`` >= 1 and the counts and frequencies are finite and >= 0, frequencies at
+    most ``n_images``."""
+    check_int("tf_idf", "n_images", n_images, 1)
     n = np.asarray(counts, dtype=np.float64)
     held = np.asarray(document_frequency, dtype=np.float64)
+    if held.ndim != 1 or n.shape[-1:] != held.shape:
+        raise ValueError(
+            f"tf_idf: counts (..., K) and document_frequency (K,) must share K, got shapes "
+            f"{n.shape} and {held.shape}"
+        )
+    for name, values in (("counts", n), ("document_frequency", held)):
+        if not (np.isfinite(values).all() and (values >= 0).all()):
+            raise ValueError(f"tf_idf: {name} must be finite and >= 0, got {values.tolist()}")
+    if (held > n_images).any():
+        raise ValueError(f"tf_idf: document_frequency must be <= n_images ({n_images})")
     total = n.sum(axis=-1, keepdims=True)
     with np.errstate(divide="ignore", invalid="ignore"):
         tf = np.where(total > 0, n / total, 0.0)

@@ -171,7 +171,8 @@ class VisualHeadingOdometry:
 
     def update(self, features: HorizonFeatures, walk_delta_rad: float) -> HeadingStep:
         """Take a frame's ``features`` with the walk engine's heading change since the last
-        frame ``walk_delta_rad`` (rad); return the body's heading change."""
+        frame ``walk_delta_rad`` (rad, finite); return the body's heading change."""
+        check_finite("VisualHeadingOdometry.update", "walk_delta_rad", walk_delta_rad)
         if not self._frames:
             self._frames.append(_Frame(features, 0.0, math.inf))
             return HeadingStep(0.0, False, 0, 0, math.inf)

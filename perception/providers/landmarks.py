@@ -30,6 +30,7 @@ from perception.landmarks.visual_odometry import (
 from perception.providers.base import PerceptionContext, Provider
 from perception.representations import HORIZON_FEATURES, ODOMETRY, ROBOT_SIGHTINGS, Prior
 from perception.types import CameraModel, OdometryStep, RobotSighting
+from perception.validation import finite_vector
 
 
 class HorizonFeatureProvider(Provider):
@@ -55,7 +56,7 @@ class WalkOdometry(Provider):
     requires = ("odometry_delta",)
 
     def update(self, inputs: Mapping[str, Any], time_s: float) -> OdometryStep:
-        delta = np.asarray(inputs["odometry_delta"], dtype=np.float64)
+        delta = finite_vector(inputs["odometry_delta"], "frame.odometry_delta", 3)
         return OdometryStep(delta=delta, walk_delta=delta)
 
 

@@ -59,6 +59,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -403,13 +404,35 @@ class EkfSlam:
                 f"got {type(observations).__name__}"
             )
         checked = [_measurement(obs, f"observations[{i}]") for i, obs in enumerate(observations)]
+        before = self._map_state()  # a sighting the model cannot use leaves the filter as it was
         fused = 0
-        for landmark_id, z, Q in checked:
-            if landmark_id in self._column:
-                fused += self._correct(landmark_id, z, Q)
-            else:
-                fused += self._sight_unmapped(landmark_id, z, Q)
+        for k, (landmark_id, z, Q) in enumerate(checked):
+            try:
+                if landmark_id in self._column:
+                    fused += self._correct(landmark_id, z, Q)
+                else:
+                    fused += self._sight_unmapped(landmark_id, z, Q)
+            except ValueError as error:
+                self._restore(before)
+                raise ValueError(f"observations[{k}] cannot be used: {error}") from error
         return fused
+
+    def _map_state(self) -> tuple[Any, ...]:
+        """What :meth:`update` changes, to put back (the arrays are replaced, never written)."""
+        pending = {k: list(v) for k, v in self._pending.items()}
+        return (
+            self._mu,
+            self._sigma,
+            dict(self._column),
+            dict(self._first_estimate),
+            pending,
+            self._rejected,
+        )
+
+    def _restore(self, state: tuple[Any, ...]) -> None:
+        """Put back a :meth:`_map_state`."""
+        (self._mu, self._sigma, self._column, self._first_estimate, self._pending) = state[:5]
+        self._rejected = state[5]
 
     def update_pose(
         self,

@@ -69,6 +69,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from perception.estimation.gating import chi2_threshold, mahalanobis_squared
 from perception.estimation.kalman import joseph_update
@@ -293,11 +294,14 @@ class BallFilter:
         self._unkicked: tuple[FloatArray, FloatArray] | None = None  # our kick left it be
         self._unseen_chance = 1.0  # that a ball where believed was missed since last seen
 
-    def estimate(self, self_pose: SlamEstimate) -> BallEstimate:
-        """What the filter believes now, placed on the field from ``self_pose``."""
-        field_state, field_cov = ball_in_field(
-            self._state, self._cov, self_pose.pose, self_pose.pose_cov
-        )
+    def estimate(self, self_pose: SlamEstimate | tuple[ArrayLike, ArrayLike]) -> BallEstimate:
+        """What the filter believes now, placed on the field from ``self_pose`` (a
+        :class:`SlamEstimate` or a ``(pose, pose_cov)`` pair, checked as in :meth:`update`)."""
+        return self._estimate_at(*checked_self_pose(self_pose))
+
+    def _estimate_at(self, pose: FloatArray, pose_cov: FloatArray) -> BallEstimate:
+        """:meth:`estimate` from the checked ``pose`` (3,) and ``pose_cov`` (3, 3)."""
+        field_state, field_cov = ball_in_field(self._state, self._cov, pose, pose_cov)
         return BallEstimate(
             state=field_state if self._known else np.zeros(4),
             cov=field_cov if self._known else self._cov.copy(),
@@ -330,7 +334,9 @@ class BallFilter:
             raise ValueError(f"time_s must not go back: {time_s} after {self._time_s}")
         odometry = finite_vector(odometry, "odometry", 3)
         checked = checked_sightings(sightings, BallSighting)
-        checked_self_pose(self_pose)
+        pose, pose_cov = checked_self_pose(self_pose)
+        if in_view is not None and not callable(in_view):
+            raise TypeError(f"in_view must be a function of a point (2,) or None, got {in_view!r}")
         kick = (
             np.zeros(2)
             if kick_velocity is None
@@ -366,7 +372,7 @@ class BallFilter:
             position_std(self._cov) > c.lost_std_m or self._unseen_chance < c.lost_chance
         ):
             self._lost()
-        return self.estimate(self_pose)
+        return self._estimate_at(pose, pose_cov)
 
     def _lost(self) -> None:
         """The belief grew too uncertain, or went unseen in view: the ball where our last kick

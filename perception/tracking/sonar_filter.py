@@ -47,6 +47,7 @@ from perception.types import RobotSighting
 from perception.validation import (
     InvalidTypeError,
     check_choice,
+    check_covariance,
     check_finite,
     check_int,
     check_positive,
@@ -404,6 +405,7 @@ def confirm_with_sonar(
             )
         check_positive(f"sightings[{k}]", "range_m", sighting.range_m)
         check_finite(f"sightings[{k}]", "bearing_rad", sighting.bearing_rad)
+        check_covariance(sighting.cov, f"sightings[{k}].cov", 2, singular_ok=True)
     pairs = sorted(
         (abs(observations[j].range_m - predicted), k, j)
         for k, sighting in enumerate(sightings)
