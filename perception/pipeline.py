@@ -126,7 +126,7 @@ from perception.tracking.ball_filter import BallFilterConfig
 from perception.tracking.robot_tracker import RobotTrackerConfig
 from perception.tracking.sonar_filter import SonarFilterConfig
 from perception.types import SensorFrame
-from perception.validation import check_choice, check_finite, check_in_interval
+from perception.validation import check_choice, check_finite, check_in_interval, check_instance
 from perception.vision.cnn_ball import CnnBallConfig
 from perception.vision.cnn_detector import CnnDetectorConfig
 from perception.vision.cnn_robots import CnnRobotConfig
@@ -340,6 +340,8 @@ class PerceptionPipeline:
         outputs: Collection[str],
         emulated: Collection[str] = (),
     ) -> None:
+        check_instance("config", config, PipelineConfig)
+        check_instance("context", context, PerceptionContext)
         self.config = config
         self._providers: dict[str, Provider] = {}  # in dependency order
         self._previous: dict[str, Any] = {}  # the last frame's representations

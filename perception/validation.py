@@ -136,6 +136,15 @@ def check_bool(owner: str, name: str, value: object) -> None:
         raise InvalidTypeError(f"{_label(owner, name)} must be a bool, got {_got(value)}")
 
 
+def check_instance(name: str, value: object, expected: type, *, optional: bool = False) -> None:
+    """InvalidTypeError unless ``value`` (the argument ``name``) is an ``expected`` (or None,
+    with ``optional``): a config or context of the wrong class fails here, by name, and not as
+    an AttributeError deep inside."""
+    if not (isinstance(value, expected) or (optional and value is None)):
+        wanted = expected.__name__ + (" or None" if optional else "")
+        raise InvalidTypeError(f"{name} must be a {wanted}, got {type(value).__name__}")
+
+
 def check_generator(name: str, value: object) -> None:
     """InvalidTypeError unless ``value`` (the argument ``name``) is a numpy Generator: every
     random draw comes from one the caller seeded."""

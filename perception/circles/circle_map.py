@@ -53,6 +53,7 @@ from perception.types import MappedCircle
 from perception.validation import (
     check_covariance,
     check_finite,
+    check_instance,
     check_int,
     check_positive,
     check_probability,
@@ -135,6 +136,7 @@ class CircleMapper:
     """The circle map (module docstring); one :meth:`update` per laser scan."""
 
     def __init__(self, config: CircleMapConfig | None = None) -> None:
+        check_instance("config", config, CircleMapConfig, optional=True)
         self.config = config or CircleMapConfig()
         self._gate = chi2_threshold(self.config.gate_probability, 2)
         self._circles: list[_Circle] = []

@@ -76,6 +76,7 @@ def whitened_measurement(
     """
     if not isinstance(observation, PoseObservation):
         raise TypeError(f"{name} must be a PoseObservation, got {type(observation).__name__}")
+    check_positive("whitened_measurement", "weight", weight, upper=1.0, upper_inclusive=True)
     # Heading: near ±pi the plain difference z - x can be off by 2 pi.
     e = wrapped_residual(observation.pose, pose, _HEADING)
     eigenvalues, U = np.linalg.eigh(weight * observation.information)

@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 from perception.geometry import FloatArray, wrap_scalar
 from perception.landmarks.horizon_features import HorizonFeatures
 from perception.landmarks.matching import MatchingConfig, match_features
-from perception.validation import check_finite, check_int, check_positive
+from perception.validation import check_finite, check_instance, check_int, check_positive
 
 # (earlier frame, later frame) -> index pairs (M, 2): column 0 into the earlier frame's
 # features, column 1 into the later one's
@@ -161,6 +161,9 @@ class VisualHeadingOdometry:
     """
 
     def __init__(self, config: VisualOdometryConfig, match: Matcher) -> None:
+        check_instance("config", config, VisualOdometryConfig)
+        if not callable(match):
+            raise TypeError(f"match must be a function of two frames' features, got {match!r}")
         self.config = config
         self.match = match
         self._frames: deque[_Frame] = deque(maxlen=config.history)

@@ -80,6 +80,7 @@ from perception.types import BallEstimate, BallSighting, SlamEstimate
 from perception.validation import (
     check_finite,
     check_in_interval,
+    check_instance,
     check_positive,
     check_probability,
     finite_vector,
@@ -279,6 +280,7 @@ class BallFilter:
     """The ball's egocentric Kalman filter (module doc); :meth:`update` once per frame."""
 
     def __init__(self, config: BallFilterConfig | None = None) -> None:
+        check_instance("config", config, BallFilterConfig, optional=True)
         self.config = config if config is not None else BallFilterConfig()
         self._gate = self.config.gate_threshold
         self.reset()

@@ -49,6 +49,7 @@ from perception.validation import (
     check_choice,
     check_covariance,
     check_finite,
+    check_instance,
     check_int,
     check_positive,
 )
@@ -224,6 +225,7 @@ class SonarFilter:
     """
 
     def __init__(self, config: SonarFilterConfig | None = None) -> None:
+        check_instance("config", config, SonarFilterConfig, optional=True)
         self.config = SonarFilterConfig() if config is None else config
         # Per update: its time (s) and each sector's valid echoes (E_k,) (m).
         self._window: deque[tuple[float, tuple[FloatArray, ...]]] = deque(

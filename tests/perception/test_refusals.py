@@ -12,6 +12,7 @@ import pytest
 from perception.circles.circle_map import CircleMapper
 from perception.estimation.kalman import joseph_update
 from perception.field.dimensions import FieldDimensions
+from perception.field.pose_observation import PoseObservation, whitened_measurement
 from perception.landmarks.bag_of_words import tf_idf
 from perception.landmarks.horizon_features import HorizonFeatures
 from perception.landmarks.surf1d import Surf1dFeatures
@@ -172,3 +173,34 @@ def test_field_markings_must_fit_inside_the_lines(field: str, value: float, matc
         FieldDimensions(**{field: value})
     with pytest.raises(TypeError, match="length_m must be a real number, got str"):
         FieldDimensions(length_m="9")  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("build", "match"),
+    [
+        (lambda: BallFilter("x"), "config must be a BallFilterConfig or None, got str"),  # type: ignore[arg-type]
+        (lambda: CircleMapper("x"), "config must be a CircleMapConfig or None, got str"),  # type: ignore[arg-type]
+        (
+            lambda: VisualHeadingOdometry(None, lambda a, b: None),  # type: ignore[arg-type]
+            "config must be a VisualOdometryConfig, got NoneType",
+        ),
+        (
+            lambda: PerceptionPipeline(None, None, []),  # type: ignore[arg-type]
+            "config must be a PipelineConfig, got NoneType",
+        ),
+        (
+            lambda: PerceptionPipeline(PipelineConfig(), None, []),  # type: ignore[arg-type]
+            "context must be a PerceptionContext, got NoneType",
+        ),
+    ],
+)
+def test_a_config_of_the_wrong_class_is_refused_by_name(build: object, match: str) -> None:
+    with pytest.raises(TypeError, match=match):
+        build()  # type: ignore[operator]
+
+
+@pytest.mark.parametrize("weight", [NAN, -1.0, 0.0, 1.5])
+def test_a_pose_observation_is_fused_with_a_weight_in_zero_one(weight: float) -> None:
+    observation = PoseObservation(np.zeros(3), np.eye(3), 0.01, 3)
+    with pytest.raises(ValueError, match="weight"):
+        whitened_measurement(observation, np.zeros(3), weight)
