@@ -13,21 +13,18 @@ policy, each robot mapped to its team's; ``--policies shared`` trains one policy
 
 from __future__ import annotations
 
-try:
-    from agents.rllib.envs import TEAM_ENV
-    from agents.rllib.training import (
-        example_config,
-        example_parser,
-        parse_example_args,
-        run_example,
-        with_team_policies,
-    )
-except ModuleNotFoundError as missing:
-    if missing.name != "ray":
-        raise
-    raise SystemExit(
-        'this example needs Ray RLlib: pip install -c constraints.txt -e ".[ray]"'
-    ) from None
+from agents.rllib import require_ray
+
+require_ray()
+
+from agents.rllib.envs import TEAM_ENV  # noqa: E402  (needs ray)
+from agents.rllib.training import (  # noqa: E402  (needs ray)
+    example_config,
+    example_parser,
+    parse_example_args,
+    run_example,
+    with_team_policies,
+)
 
 
 def main(argv: list[str] | None = None) -> None:
