@@ -67,12 +67,13 @@ def whitened_measurement(
     """``observation`` (a :class:`PoseObservation`) of the pose estimate ``pose`` (3,) as the
     linear measurement ``y = H e`` with ``R = I``: ``e`` (3,) the residual ``z - pose`` (its
     heading wrapped), ``H = (weight L)^(1/2)`` (3, 3), the symmetric square root of the fused
-    share ``weight`` (in (0, 1], checked by the caller) of the information ``L``, so that
+    share ``weight`` (in (0, 1]) of the information ``L``, so that
     ``H^T R^-1 H = weight L``; and ``rank(L)``, the degrees of freedom of a gate on ``y``.
 
     Directions ``L`` does not inform (eigenvalues below ``1e-9`` of the largest) have zero rows
     in ``H``: a residual along them neither moves an estimate nor counts against a gate.
-    Raises ``TypeError`` (naming ``name``) when ``observation`` is not a PoseObservation.
+    Raises ``TypeError`` (naming ``name``) when ``observation`` is not a PoseObservation,
+    ``ValueError`` for a ``weight`` outside (0, 1].
     """
     if not isinstance(observation, PoseObservation):
         raise TypeError(f"{name} must be a PoseObservation, got {type(observation).__name__}")

@@ -454,7 +454,6 @@ class EkfSlam:
         when ``y^T S^-1 y`` exceeds the chi-square quantile with ``rank(L)`` degrees of freedom;
         None fuses every observation. One that carries no information is not fused either.
         """
-        check_positive("update_pose", "weight", weight, upper=1.0, upper_inclusive=True)
         if gate_probability is not None:
             check_probability("update_pose", "gate_probability", gate_probability)
         y, H, rank = whitened_measurement(observation, self._mu[:3], float(weight))

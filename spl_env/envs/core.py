@@ -310,7 +310,18 @@ def perception_context(config: EnvConfig, scene: SplFieldScene) -> PerceptionCon
     )
 
 
-def check_camera_mode(config: EnvConfig, pipeline: PerceptionPipeline) -> None:
+def check_buildable(
+    config: EnvConfig, pipeline: PerceptionPipeline, encoders: Iterable[ObservationEncoder]
+) -> None:
+    """ValueError, before an episode, for a robot whose ``pipeline`` and observation
+    ``encoders`` cannot run as ``config`` says: an image reader in the geometric camera mode, a
+    reader of a switched-off sensor, more robot-track rows than the tracker keeps."""
+    _check_camera_mode(config, pipeline)
+    _check_sensors(config, pipeline)
+    _check_track_rows(config, encoders)
+
+
+def _check_camera_mode(config: EnvConfig, pipeline: PerceptionPipeline) -> None:
     """ValueError when the geometric camera mode (no images) meets a provider that reads
     images and has no emulator."""
     if config.sensors.camera_mode == "rendered" or "image" not in pipeline.frame_inputs:
@@ -327,7 +338,7 @@ def check_camera_mode(config: EnvConfig, pipeline: PerceptionPipeline) -> None:
     )
 
 
-def check_sensors(config: EnvConfig, pipeline: PerceptionPipeline) -> None:
+def _check_sensors(config: EnvConfig, pipeline: PerceptionPipeline) -> None:
     """ValueError when a provider reads a sensor (the laser, the sonar) that the rig's
     configuration switches off."""
     for sensor, fields in (("laser", LASER_FIELDS), ("sonar", SONAR_FIELDS)):
@@ -344,7 +355,7 @@ def check_sensors(config: EnvConfig, pipeline: PerceptionPipeline) -> None:
         )
 
 
-def check_track_rows(config: EnvConfig, encoders: Iterable[ObservationEncoder]) -> None:
+def _check_track_rows(config: EnvConfig, encoders: Iterable[ObservationEncoder]) -> None:
     """ValueError when an observation asks for more robot-track rows than the tracker ever
     keeps tracks (the rows past them would always be empty)."""
     tracks = config.perception.robot_tracker.max_tracks
@@ -438,9 +449,7 @@ class SplEnv(RobotEnv[WorldState]):
             sorted(outputs),
             emulated=emulated_representations(cfg.sensors, cfg.perception),
         )
-        check_camera_mode(cfg, self.pipeline)
-        check_sensors(cfg, self.pipeline)
-        check_track_rows(cfg, self.encoders)
+        check_buildable(cfg, self.pipeline, self.encoders)
         rendered = cfg.sensors.camera_mode == "rendered"
         self._render_image = rendered and "image" in self.pipeline.frame_inputs
         # the bottom camera is rendered only for a provider that reads it

@@ -50,9 +50,7 @@ from perception.types import SensorFrame, SlamEstimate
 from perception.validation import check_int, check_positive
 from spl_env.envs.actions import checked_action
 from spl_env.envs.core import (
-    check_camera_mode,
-    check_sensors,
-    check_track_rows,
+    check_buildable,
     field_world_state,
     info_layout,
     perception_context,
@@ -321,9 +319,7 @@ class TeamEnv(ParallelEnv[str, dict[str, np.ndarray], np.ndarray]):
             )
             rig = NaoRig(sensors, robot, emulators)
             self.players.append(Player(name, robot, rig, pipeline, encoders[robot.team]))
-        check_camera_mode(cfg, self.players[0].pipeline)
-        check_sensors(cfg, self.players[0].pipeline)
-        check_track_rows(cfg, encoders[0])
+        check_buildable(cfg, self.players[0].pipeline, encoders[0])
         inputs = self.players[0].pipeline.frame_inputs
         rendered = cfg.sensors.camera_mode == "rendered"
         self._render_image = rendered and "image" in inputs
