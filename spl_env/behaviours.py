@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from perception.geometry import FloatArray, wrap_angle
+from perception.geometry import FloatArray, wrap_scalar
 from spl_env.field import FieldDimensions
 from spl_env.robots.nao import NaoRobot
 from spl_env.sim.placement import Placement
@@ -41,8 +41,8 @@ def waypoint_command(config: WalkerConfig, pose: FloatArray, target: FloatArray)
     small ones are corrected while walking forward.
     """
     dx, dy = target[0] - pose[0], target[1] - pose[1]
-    heading_error = float(wrap_angle(math.atan2(dy, dx) - pose[2]))
-    omega = float(np.clip(2.0 * heading_error, -config.turn_rate_rps, config.turn_rate_rps))
+    heading_error = wrap_scalar(math.atan2(dy, dx) - pose[2])
+    omega = min(max(2.0 * heading_error, -config.turn_rate_rps), config.turn_rate_rps)
     if abs(heading_error) > config.turn_in_place_rad:
         return np.array([0.0, 0.0, omega])
     return np.array([config.speed_mps, 0.0, omega])

@@ -80,7 +80,8 @@ def encode_all(encoders: Sequence[ObservationEncoder], data: EncoderInput) -> di
     obs: dict[str, FloatArray] = {}
     for encoder in encoders:
         obs.update(encoder.encode(data))
-    diverged = sorted(k for k, v in obs.items() if not np.all(np.isfinite(v)))
-    if diverged:
+    values = [np.ravel(v) for v in obs.values()]
+    if values and not np.isfinite(np.concatenate(values)).all():
+        diverged = sorted(k for k, v in obs.items() if not np.all(np.isfinite(v)))
         raise FloatingPointError(f"observation {diverged} not finite: perception diverged")
     return {k: v.astype(np.float32) for k, v in obs.items()}

@@ -13,7 +13,7 @@ from numpy.typing import ArrayLike
 
 from perception.geometry import FloatArray
 from perception.sensor_models import LaserModel
-from spl_env.sensors.raycast import RayCaster, cast, fan_rays
+from spl_env.sensors.raycast import RayCaster, RayFan, cast
 
 
 class LaserConfig(LaserModel):
@@ -39,7 +39,12 @@ class Laser:
     def __init__(self, config: LaserModel) -> None:
         self.config = config
         self.model: LaserModel = config
-        self._angles = config.beam_angles()  # cached for the rays of every scan
+        self._fan = RayFan(
+            mount_x_m=config.mount_x_m,
+            mount_height_m=config.mount_height_m,
+            angles=config.beam_angles(),
+            length_m=config.max_range_m,
+        )
 
     def beam_angles(self) -> FloatArray:
         """Beam directions (n_beams,) in the robot frame (rad, 0 = forward, + = left): the
@@ -48,14 +53,7 @@ class Laser:
 
     def rays(self, robot_pose: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Field-frame beam (starts, ends), each (n_beams, 3) (m), for the (3,) field pose."""
-        m = self.model
-        return fan_rays(
-            robot_pose,
-            mount_x_m=m.mount_x_m,
-            mount_height_m=m.mount_height_m,
-            angles=self._angles,
-            length_m=m.max_range_m,
-        )
+        return self._fan.rays(robot_pose)
 
     def measure(
         self,

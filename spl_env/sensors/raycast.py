@@ -27,29 +27,36 @@ class RayCaster(Protocol):
         ...
 
 
-def fan_rays(
-    robot_pose: ArrayLike,
-    *,
-    mount_x_m: float,
-    mount_height_m: float,
-    angles: FloatArray,
-    length_m: float,
-) -> tuple[FloatArray, FloatArray]:
-    """Horizontal rays from a sensor on the robot, as (N, 3) field-frame starts and ends (m).
+class RayFan:
+    """Horizontal rays from a sensor on a robot, laid out once in the robot frame.
 
     The sensor sits ``mount_x_m`` ahead of the robot origin at ``mount_height_m``; ``angles``
     (N,) are the ray directions in the robot frame (rad, 0 = forward, + = left) and every ray is
-    ``length_m`` long. ``robot_pose`` is the (3,) field pose ``(x, y, theta)``.
+    ``length_m`` long.
     """
-    pose = np.asarray(robot_pose, dtype=np.float64)
-    if pose.shape != (3,) or not np.all(np.isfinite(pose)):
-        raise ValueError(f"robot_pose must be a finite (3,) pose (x, y, theta), got {pose!r}")
-    local_ends = np.column_stack([mount_x_m + length_m * np.cos(angles), length_m * np.sin(angles)])
-    origin = transform_points(pose, [[mount_x_m, 0.0]])
-    height = np.full((len(angles), 1), mount_height_m)
-    starts = np.hstack([np.repeat(origin, len(angles), axis=0), height])
-    ends = np.hstack([transform_points(pose, local_ends), height])
-    return starts, ends
+
+    def __init__(
+        self, *, mount_x_m: float, mount_height_m: float, angles: FloatArray, length_m: float
+    ) -> None:
+        angles = np.asarray(angles, dtype=np.float64)
+        local_ends = np.column_stack(
+            [mount_x_m + length_m * np.cos(angles), length_m * np.sin(angles)]
+        )
+        # (N + 1, 2) robot-frame points: the sensor, then each ray's end
+        self._local = np.vstack([[[mount_x_m, 0.0]], local_ends])
+        self._heights = np.full((len(angles), 3), mount_height_m)
+
+    def rays(self, robot_pose: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """The rays as (N, 3) field-frame starts and ends (m) from the robot at ``robot_pose``,
+        the (3,) field pose ``(x, y, theta)``."""
+        pose = np.asarray(robot_pose, dtype=np.float64)
+        if pose.shape != (3,) or not np.all(np.isfinite(pose)):
+            raise ValueError(f"robot_pose must be a finite (3,) pose (x, y, theta), got {pose!r}")
+        points = transform_points(pose, self._local)
+        starts, ends = self._heights.copy(), self._heights.copy()
+        starts[:, :2] = points[0]
+        ends[:, :2] = points[1:]
+        return starts, ends
 
 
 def cast(

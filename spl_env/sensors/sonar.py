@@ -16,15 +16,17 @@ lost with the dropout probability, and is dropped (never clipped) when outside t
 
 from __future__ import annotations
 
+import itertools
+import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from perception.geometry import FloatArray
 from perception.sensor_models import N_SONAR_SECTORS, SonarModel
 from perception.validation import check_in_interval, check_int
-from spl_env.sensors.raycast import RayCaster, cast, fan_rays
+from spl_env.sensors.raycast import RayCaster, RayFan, cast
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -60,6 +62,12 @@ class Sonar:
         centres = config.sector_centres_rad()[:, None]
         widths = config.sector_widths_rad()[:, None]
         self._angles = (centres + widths * offsets).ravel()
+        self._fan = RayFan(
+            mount_x_m=config.mount_x_m,
+            mount_height_m=config.mount_height_m,
+            angles=self._angles,
+            length_m=config.max_range_m,
+        )
 
     def ray_angles(self) -> FloatArray:
         """Directions (3 * rays_per_sector,) of the rays in the robot frame (rad), sector-major."""
@@ -71,14 +79,7 @@ class Sonar:
         ``robot_pose`` is the robot's (3,) field pose ``(x, y, theta)``; rays run from the
         transducers out to ``max_range_m``.
         """
-        m = self.model
-        return fan_rays(
-            robot_pose,
-            mount_x_m=m.mount_x_m,
-            mount_height_m=m.mount_height_m,
-            angles=self._angles,
-            length_m=m.max_range_m,
-        )
+        return self._fan.rays(robot_pose)
 
     def measure(
         self,
@@ -101,11 +102,11 @@ class Sonar:
         out = np.full((N_SONAR_SECTORS, m.max_echoes), np.nan)
         for sector in range(N_SONAR_SECTORS):
             rows = slice(sector * n, (sector + 1) * n)
-            if np.all(bodies[rows] < 0):  # silence: no echo, and no noise to draw
-                continue
             true_echoes = merge_echoes(
                 surface_echoes(distances[rows], bodies[rows]), m.echo_merge_m
             )
+            if not len(true_echoes):  # silence: no echo, and no noise to draw
+                continue
             echoes = self._noisy(true_echoes, rng)
             out[sector, : len(echoes)] = echoes
         return out
@@ -119,21 +120,30 @@ class Sonar:
         return np.sort(noisy[kept])[: m.max_echoes]
 
 
-def surface_echoes(distances: FloatArray, bodies: NDArray[np.int64]) -> FloatArray:
+def surface_echoes(distances: ArrayLike, bodies: ArrayLike) -> FloatArray:
     """Nearest distance (E,) of each reflecting surface seen by a fan of rays, unsorted.
 
     ``distances`` (R,) are the rays' hit distances (NaN = no hit) and ``bodies`` (R,) the bodies
     hit (-1 = none), in angular order; a surface is a run of consecutive rays on the same body.
     """
-    ids = np.where(np.isnan(distances), -1, bodies)
-    run = np.cumsum(np.r_[True, ids[1:] != ids[:-1]]) - 1
-    nearest = np.full(run[-1] + 1, np.inf)
-    hit = ids >= 0
-    np.minimum.at(nearest, run[hit], distances[hit])
-    return nearest[np.isfinite(nearest)]
+    nearest: list[float] = []
+    surface = -1  # the body of the run the last ray belongs to (-1: no surface)
+    for distance, body in zip(
+        np.asarray(distances, dtype=np.float64).tolist(), np.asarray(bodies).tolist(), strict=True
+    ):
+        if body < 0 or math.isnan(distance):
+            surface = -1
+        elif body != surface:
+            nearest.append(distance)
+            surface = body
+        elif distance < nearest[-1]:
+            nearest[-1] = distance
+    return np.array(nearest)
 
 
 def merge_echoes(echoes: ArrayLike, merge_m: float) -> FloatArray:
     """Sorted echoes (K,): each chain of echoes spaced less than ``merge_m`` becomes its nearest."""
-    e = np.sort(np.asarray(echoes, dtype=np.float64))
-    return e[np.diff(e, prepend=-np.inf) >= merge_m]
+    e = sorted(np.asarray(echoes, dtype=np.float64).ravel().tolist())
+    return np.array(
+        [x for before, x in itertools.pairwise([-math.inf, *e]) if x - before >= merge_m]
+    )
