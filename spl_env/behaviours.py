@@ -84,7 +84,10 @@ class WaypointWalker:
     def command(self, pose: FloatArray, dt_s: float, blocked: bool) -> FloatArray:
         """Command (3,) for this control step; ``blocked`` says the last step hit something."""
         self.stuck_s = self.stuck_s + dt_s if blocked else 0.0
-        arrived = math.hypot(*(self.target - pose[:2])) < self.config.arrive_radius_m
+        arrived = (
+            math.hypot(self.target[0] - pose[0], self.target[1] - pose[1])
+            < self.config.arrive_radius_m
+        )
         if self.waypoints is not None:
             if arrived:
                 self.index = (self.index + 1) % len(self.waypoints)

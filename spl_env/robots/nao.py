@@ -334,7 +334,7 @@ class NaoRobot:
             change = accel * dt_s
             velocity.append(now + min(max(target - now, -change), change))
         self.velocity = np.array(velocity)
-        speed = self._speed_fraction()
+        speed = self._speed_fraction_of(velocity)
         self.gait_phase = (
             self.gait_phase + 2 * math.pi * cfg.gait_frequency_hz * dt_s * (speed > 1e-3)
         ) % (2 * math.pi)
@@ -358,8 +358,9 @@ class NaoRobot:
                 self.pose = self.pose.copy()
                 self.pose[2] = wrap_angle(self.pose[2] + self._bump_turn(contact_xy, dt_s))
             return
-        veer = self.config.turn_bias_rad_per_m * math.hypot(increment[0], increment[1])
-        self.pose = compose(self.pose, np.asarray(increment) + np.array([0.0, 0.0, veer]))
+        dx, dy, dtheta = np.asarray(increment, dtype=np.float64).tolist()
+        veer = self.config.turn_bias_rad_per_m * math.hypot(dx, dy)
+        self.pose = compose(self.pose, (dx, dy, dtheta + veer))
 
     def _bump_turn(self, contact_xy: FloatArray, dt_s: float) -> float:
         """The pivot (rad) away from ``contact_xy`` (2,) over ``dt_s``: right (negative) when the
@@ -417,10 +418,12 @@ class NaoRobot:
 
     def _speed_fraction(self) -> float:
         """The walk's speed as the largest fraction of a speed limit among vx, vy, omega."""
-        return max(
-            abs(v) / top
-            for v, top in zip(self.velocity.tolist(), self.config.max_speed, strict=True)
-        )
+        return self._speed_fraction_of(self.velocity.tolist())
+
+    def _speed_fraction_of(self, velocity: list[float]) -> float:
+        """:meth:`_speed_fraction` of the walk velocity ``velocity`` (vx, vy, omega)."""
+        (vx, vy, omega), (top_x, top_y, top_omega) = velocity, self.config.max_speed
+        return max(abs(vx) / top_x, abs(vy) / top_y, abs(omega) / top_omega)
 
     def sync(self) -> None:
         """Push pose, sway and head joints into the physics world."""
@@ -428,8 +431,7 @@ class NaoRobot:
         self.world.set_pose(
             self.name, (self.pose[0], self.pose[1], bob), self.pose[2], roll=roll, pitch=pitch
         )
-        self.world.set_joint(self.name, 0, float(self.head[0]))
-        self.world.set_joint(self.name, 1, float(self.head[1]))
+        self.world.set_joints(self.name, self.head.tolist())
 
     def camera_state(self) -> CameraState:
         """The camera pose the robot's joint sensors report (no sway): robot frame (computed

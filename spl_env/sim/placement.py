@@ -69,6 +69,10 @@ class Placement:
         self.dimensions = dimensions
         self.obstacles = np.asarray(obstacles, dtype=np.float64).reshape(-1, 3)
         self.robot_radius_m = robot_radius_m
+        # how far a robot's centre may go from the origin, and come to each obstacle's centre
+        length, width = dimensions.carpet_size_m
+        self._half_extent = (length / 2 - robot_radius_m, width / 2 - robot_radius_m)
+        self._reach = robot_radius_m + self.obstacles[:, 2]
 
     def collides(self, xy: FloatArray, robots: Sequence[Mobile], clearance: float) -> bool:
         """Whether a robot at ``xy`` (2,) overlaps one of ``robots``, a post or a pole, or leaves
@@ -83,7 +87,7 @@ class Placement:
         robot, post or pole it overlaps; None when it is clear."""
         r = self.robot_radius_m
         x, y = float(xy[0]), float(xy[1])
-        half_l, half_w = (size / 2 - r for size in self.dimensions.carpet_size_m)
+        half_l, half_w = self._half_extent
         if abs(x) > half_l or abs(y) > half_w:
             edge = np.array([np.clip(x, -half_l, half_l), np.clip(y, -half_w, half_w)])
             return edge + np.array([r * np.sign(x - edge[0]), r * np.sign(y - edge[1])])
@@ -91,8 +95,8 @@ class Placement:
             if math.hypot(robot.pose[0] - x, robot.pose[1] - y) < 2 * r + clearance:
                 return np.asarray(robot.pose[:2], dtype=np.float64).copy()
         d = np.hypot(self.obstacles[:, 0] - x, self.obstacles[:, 1] - y)
-        hit = np.flatnonzero(d < r + self.obstacles[:, 2] + clearance)
-        return self.obstacles[hit[0], :2].copy() if hit.size else None
+        hit = d < self._reach + clearance
+        return self.obstacles[hit.argmax(), :2].copy() if hit.any() else None
 
     def random_pose(self, rng: np.random.Generator, margin_m: float) -> FloatArray:
         """A pose (3,) drawn uniformly inside the field lines shrunk by ``margin_m`` (m), any

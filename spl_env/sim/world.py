@@ -473,10 +473,16 @@ class BulletWorld:
         p.resetBaseVelocity(body_id, list(linear), list(angular), physicsClientId=self.client)
         self._touched(body_id)
 
-    def set_joint(self, name: str, joint_index: int, angle: float) -> None:
-        """Set a revolute joint of body ``name`` to ``angle`` (rad)."""
+    def set_joints(self, name: str, angles: Sequence[float]) -> None:
+        """Set the revolute joints ``0 .. len(angles) - 1`` of body ``name`` to ``angles``
+        (rad), at rest."""
         body_id = self.body(name)
-        p.resetJointState(body_id, joint_index, angle, physicsClientId=self.client)
+        p.resetJointStatesMultiDof(
+            body_id,
+            list(range(len(angles))),
+            [[float(angle)] for angle in angles],
+            physicsClientId=self.client,
+        )
         self._touched(body_id)
 
     def _touched(self, body_id: int) -> None:
