@@ -10,7 +10,8 @@ its own would give, where the machine is shared), the parts of a step from ``inf
 (physics; render = the emulators, sensors, perception summed over the players; "other" is the
 rest: commands, observations, rewards, info) and the first and later ``reset()`` wall times.
 Settings: 2 v 2 with the full and the light ``info`` (the target: >= 100 steps/s for 2 v 2),
-1 v 1 and 3 v 3 with the full ``info``.
+1 v 1 and 3 v 3 with the full ``info``, and 2 v 2 without poles (``spl_env.NO_POLES_KWARGS``:
+each robot localises from the field's features).
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from spl_env import team_v0
+from spl_env import NO_POLES_KWARGS, team_v0
 
 PARTS = ("physics", "render", "sensors", "perception")
 GEOMETRIC = {"camera_mode": "geometric", "frontend": "colour"}
@@ -88,6 +89,7 @@ def main() -> None:
         {"players_per_side": 2, "info_level": "light"},
         {"players_per_side": 1},
         {"players_per_side": 3},
+        {"players_per_side": 2, **NO_POLES_KWARGS},
     )
     runs = [measure(args.steps, args.resets, args.seed, o) for o in settings]
     result = {
