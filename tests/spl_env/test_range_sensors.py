@@ -294,7 +294,13 @@ def test_surface_echoes_split_runs_of_rays_per_body() -> None:
     distances = np.array([1.0, 0.9, nan, 2.0, 2.1, 0.5, 0.4, 1.5])
     bodies = np.array([3, 3, -1, 3, 3, 7, 7, 3])
     np.testing.assert_array_equal(np.sort(surface_echoes(distances, bodies)), [0.4, 0.9, 1.5, 2.0])
-    np.testing.assert_array_equal(merge_echoes([1.0, 1.04, 1.08, 1.2], 0.05), [1.0, 1.2])
+    # a NaN distance is no hit whatever the body: it splits the run too
+    assert surface_echoes(np.array([1.0, nan, 0.8]), np.array([3, 3, 3])).tolist() == [1.0, 0.8]
+    assert surface_echoes(np.array([]), np.array([], dtype=np.int64)).shape == (0,)
+    # chains by consecutive spacing, in any input order: 1.0-1.04-1.08 is one echo at 1.0
+    np.testing.assert_array_equal(merge_echoes([1.2, 1.08, 1.0, 1.04], 0.05), [1.0, 1.2])
+    np.testing.assert_array_equal(merge_echoes([2.0, 1.0], 0.05), [1.0, 2.0])
+    assert merge_echoes([], 0.05).shape == (0,)
 
 
 @pytest.mark.parametrize(
