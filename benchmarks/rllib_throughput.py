@@ -27,10 +27,20 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import ray
 
-from agents.rllib.envs import STRIKER_ENV, TEAM_ENV, make_striker_env, make_team_env
-from agents.rllib.training import init_ray, ppo_config, with_team_policies
+from agents.rllib import require_ray
+
+require_ray()
+
+import ray  # noqa: E402  (after the check that it is installed)
+
+from agents.rllib.envs import (  # noqa: E402  (needs ray)
+    STRIKER_ENV,
+    TEAM_ENV,
+    make_striker_env,
+    make_team_env,
+)
+from agents.rllib.training import init_ray, ppo_config, with_team_policies  # noqa: E402
 
 
 def _sample(runner: Any, steps: int) -> tuple[int, float]:

@@ -628,7 +628,11 @@ def provenance() -> dict[str, Any]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--seeds", default=None, help="episode seeds, e.g. 100-104 (default)")
+    parser.add_argument(
+        "--seeds",
+        default=None,
+        help="episode seeds, e.g. 100-104 (default: --episodes of 100, 101, ...)",
+    )
     parser.add_argument("--episodes", type=int, default=10, help="seeds 100.. when no --seeds")
     parser.add_argument("--robots", type=int, nargs="+", default=[4, 8])
     parser.add_argument("--frontends", nargs="+", default=["vision", "cnn", "oracle"])

@@ -11,6 +11,6 @@ import importlib.util
 
 def require_ray() -> None:
     """End the program with the command that installs Ray RLlib when it is missing: an
-    example's first call, before it imports the modules that need Ray."""
+    example's (or benchmark's) first call, before it imports the modules that need Ray."""
     if importlib.util.find_spec("ray") is None:
-        raise SystemExit('this example needs Ray RLlib: pip install -c constraints.txt -e ".[ray]"')
+        raise SystemExit('this program needs Ray RLlib: pip install -c constraints.txt -e ".[ray]"')
