@@ -417,11 +417,12 @@ class NaoRobot:
         )
 
     def _speed_fraction(self) -> float:
-        """The walk's speed as the largest fraction of a speed limit among vx, vy, omega."""
+        """The walk's speed now: :meth:`_speed_fraction_of` the robot's velocity."""
         return self._speed_fraction_of(self.velocity.tolist())
 
     def _speed_fraction_of(self, velocity: list[float]) -> float:
-        """:meth:`_speed_fraction` of the walk velocity ``velocity`` (vx, vy, omega)."""
+        """The largest fraction of its speed limit (``config.max_speed``) among the components
+        of the walk velocity ``velocity`` ``(vx, vy, omega)`` (m/s, m/s, rad/s)."""
         (vx, vy, omega), (top_x, top_y, top_omega) = velocity, self.config.max_speed
         return max(abs(vx) / top_x, abs(vy) / top_y, abs(omega) / top_omega)
 

@@ -44,7 +44,8 @@ class RayFan:
         )
         # (N + 1, 2) robot-frame points: the sensor, then each ray's end
         self._local = np.vstack([[[mount_x_m, 0.0]], local_ends])
-        self._heights = np.full((len(angles), 3), mount_height_m)
+        # (N, 3) field-frame rays' template: x and y filled in per pose, z the mount's height
+        self._template = np.full((len(angles), 3), float(mount_height_m))
 
     def rays(self, robot_pose: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """The rays as (N, 3) field-frame starts and ends (m) from the robot at ``robot_pose``,
@@ -53,7 +54,7 @@ class RayFan:
         if pose.shape != (3,) or not np.all(np.isfinite(pose)):
             raise ValueError(f"robot_pose must be a finite (3,) pose (x, y, theta), got {pose!r}")
         points = transform_points(pose, self._local)
-        starts, ends = self._heights.copy(), self._heights.copy()
+        starts, ends = self._template.copy(), self._template.copy()
         starts[:, :2] = points[0]
         ends[:, :2] = points[1:]
         return starts, ends

@@ -124,7 +124,8 @@ def surface_echoes(distances: ArrayLike, bodies: ArrayLike) -> FloatArray:
     """Nearest distance (E,) of each reflecting surface seen by a fan of rays, unsorted.
 
     ``distances`` (R,) are the rays' hit distances (NaN = no hit) and ``bodies`` (R,) the bodies
-    hit (-1 = none), in angular order; a surface is a run of consecutive rays on the same body.
+    hit (-1 = none), in angular order; a surface is a run of consecutive rays on the same body
+    (one whose nearest distance is not finite gives no echo).
     """
     nearest: list[float] = []
     surface = -1  # the body of the run the last ray belongs to (-1: no surface)
@@ -138,12 +139,15 @@ def surface_echoes(distances: ArrayLike, bodies: ArrayLike) -> FloatArray:
             surface = body
         elif distance < nearest[-1]:
             nearest[-1] = distance
-    return np.array(nearest)
+    return np.array([d for d in nearest if math.isfinite(d)])
 
 
 def merge_echoes(echoes: ArrayLike, merge_m: float) -> FloatArray:
-    """Sorted echoes (K,): each chain of echoes spaced less than ``merge_m`` becomes its nearest."""
-    e = sorted(np.asarray(echoes, dtype=np.float64).ravel().tolist())
+    """Sorted echoes (K,): each chain of echoes spaced less than ``merge_m`` becomes its nearest
+    (NaN, no echo, is dropped)."""
+    e = sorted(
+        x for x in np.asarray(echoes, dtype=np.float64).ravel().tolist() if not math.isnan(x)
+    )
     return np.array(
         [x for before, x in itertools.pairwise([-math.inf, *e]) if x - before >= merge_m]
     )

@@ -63,7 +63,8 @@ class Mobile(Protocol):
 
 class Placement:
     """Collision tests and free-pose sampling among ``obstacles`` (K, 3) in a ``dimensions``
-    area, for robots of radius ``robot_radius_m``."""
+    area, for robots of radius ``robot_radius_m``; fixed once built (the carpet's bounds and
+    the obstacles' reach are worked out from them then)."""
 
     def __init__(self, dimensions: Area, obstacles: FloatArray, robot_radius_m: float) -> None:
         self.dimensions = dimensions

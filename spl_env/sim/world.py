@@ -137,7 +137,7 @@ class BulletWorld:
         self._floor_colour_for: tuple[Lighting, NDArray[np.uint8]] | None = None
         self._probe: int | None = None  # a client holding the floor alone, to shade it
         self._dynamic: list[int] = []  # bodies with mass, which the physics moves
-        self._moved: set[int] = set()  # bodies moved by hand (set_pose, set_joint) ever
+        self._moved: set[int] = set()  # bodies moved by hand (set_pose, set_joints) ever
         self._disturbed = False  # a dynamic body was set by hand since the last physics step
         self._filter_bits: dict[int, int] = {}  # body id -> its private collision filter group
         self.time_step_s = time_step_s

@@ -188,6 +188,17 @@ def test_sonar_rays_fan_from_the_chest() -> None:
     np.testing.assert_allclose(np.linalg.norm(ends - starts, axis=1), config.max_range_m)
 
 
+def test_ray_fans_are_float_and_fresh_whatever_the_numbers_given() -> None:
+    # whole-number mounts and ranges are valid config values: the rays must not become integers
+    sonar = Sonar(SonarConfig(mount_x_m=0, mount_height_m=1, max_range_m=2))
+    starts, ends = sonar.rays((0.4, 0.3, 0.2))
+    assert starts.dtype == ends.dtype == np.float64
+    np.testing.assert_allclose(starts[0], [0.4, 0.3, 1.0], atol=1e-15)
+    np.testing.assert_allclose(np.linalg.norm(ends - starts, axis=1), 2.0)
+    starts[:] = np.nan  # each call's arrays are the caller's own
+    assert np.all(np.isfinite(sonar.rays((0.4, 0.3, 0.2))[0]))
+
+
 def test_sonar_sees_a_cylinder_ahead_in_the_middle_and_in_both_side_cones() -> None:
     # The default side cones (60° wide, centred 25° out) overlap the middle by 5°: a central
     # obstacle echoes on both sides too (seed 004), on their rays nearest ahead, 1° off axis.
@@ -301,6 +312,10 @@ def test_surface_echoes_split_runs_of_rays_per_body() -> None:
     np.testing.assert_array_equal(merge_echoes([1.2, 1.08, 1.0, 1.04], 0.05), [1.0, 1.2])
     np.testing.assert_array_equal(merge_echoes([2.0, 1.0], 0.05), [1.0, 2.0])
     assert merge_echoes([], 0.05).shape == (0,)
+    # no echo is not an echo: NaN anywhere, and surfaces whose nearest point is not finite
+    np.testing.assert_array_equal(merge_echoes([3.0, nan, 1.0], 0.05), [1.0, 3.0])
+    inf = np.inf
+    assert surface_echoes(np.array([inf, inf, 1.0]), np.array([3, 3, 4])).tolist() == [1.0]
 
 
 @pytest.mark.parametrize(
