@@ -1,9 +1,10 @@
-"""What a batch of ray casts costs PyBullet on the SPL field, by batch size.
+"""What a batch of ray casts costs on the SPL field, by batch size.
 
     python benchmarks/ray_cost.py --out benchmarks/results/ray_cost.json
 
 Builds ``SPL/ActiveVision-v0`` (its world: field, goals, poles, boards, five robots), and times
-``pybullet.rayTestBatch`` on batches of horizontal rays at the sonar's height (0.3 m), each
+``BulletWorld.ray_test`` (PyBullet's ``rayTestBatch`` and the conversion of its hits to arrays,
+as the sonar casts them) on batches of horizontal rays at the sonar's height (0.3 m), each
 2.55 m long (the sonar's range) from a random point on the carpet in a random direction, as
 the sonar's 93 rays are cast every step. Per batch size: the mean time of ``--repeats`` calls
 (µs); and the least-squares line through them, whose slope is the cost of one more ray (µs)
@@ -21,27 +22,26 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
-import pybullet as p
 
 import spl_env  # noqa: F401  (registers the env ids)
 from spl_env.envs.core import SplEnv
+from spl_env.sim.world import BulletWorld
 
 SIZES = (1, 2, 8, 31, 93, 186)
 HEIGHT_M = 0.3
 LENGTH_M = 2.55
 
 
-def batch_us(client: int, size: int, repeats: int, rng: np.random.Generator) -> float:
-    """Mean µs of one ``rayTestBatch`` of ``size`` rays (drawn anew for each size)."""
+def batch_us(world: BulletWorld, size: int, repeats: int, rng: np.random.Generator) -> float:
+    """Mean µs of one ``world.ray_test`` of ``size`` rays (drawn anew for each size)."""
     starts = np.column_stack(
         [rng.uniform(-4.5, 4.5, size), rng.uniform(-3.0, 3.0, size), np.full(size, HEIGHT_M)]
     )
     heading = rng.uniform(-np.pi, np.pi, size)
     ends = starts + LENGTH_M * np.column_stack([np.cos(heading), np.sin(heading), np.zeros(size)])
-    from_, to = starts.tolist(), ends.tolist()
     t0 = time.perf_counter()
     for _ in range(repeats):
-        p.rayTestBatch(from_, to, physicsClientId=client)
+        world.ray_test(starts, ends)
     return 1e6 * (time.perf_counter() - t0) / repeats
 
 
@@ -58,9 +58,8 @@ def main() -> None:
     if not isinstance(core, SplEnv):
         raise TypeError(f"expected an SplEnv, got {type(core).__name__}")
     env.reset(seed=args.seed)
-    client = core.world.client
     rng = np.random.default_rng(args.seed)
-    means = [batch_us(client, size, args.repeats, rng) for size in SIZES]
+    means = [batch_us(core.world, size, args.repeats, rng) for size in SIZES]
     env.close()
     slope, intercept = np.polyfit(SIZES, means, 1)
     result = {
@@ -68,7 +67,6 @@ def main() -> None:
             "cpu_count": os.cpu_count(),
             "load_average_1min": os.getloadavg()[0],
             "python": platform.python_version(),
-            "pybullet_api_version": p.getAPIVersion(),
         },
         "rays": {"height_m": HEIGHT_M, "length_m": LENGTH_M},
         "repeats": args.repeats,
