@@ -433,7 +433,7 @@ def prepare_run(
         env = gym.make(
             env_id,
             render_mode=render_mode,
-            **{**saved.get("env_kwargs", {}), **parse_overrides(overrides)},
+            **env_kwargs_for(policy_spec, parse_overrides(overrides)),
         )
         config = env.get_wrapper_attr("config")
         spec = policy_spec or default_policy(config)

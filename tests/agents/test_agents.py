@@ -358,9 +358,9 @@ def test_a_soccer_env_plays_its_own_scripted_player_by_default(tmp_path: Path) -
         ["--env", "SPL/Striker-v0", "--episodes", "1", "--out", str(tmp_path), *GEOMETRIC]
     )
     assert json.loads((tmp_path / "metrics.json").read_text())["policy"] == "centre_kick"
-    assert default_policy(gym.make("SPL/Goalie-v0", **FAST_GOALIE).get_wrapper_attr("config")) == (
-        "goalie"
-    )
+    goalie = gym.make("SPL/Goalie-v0", **FAST_GOALIE)
+    assert default_policy(goalie.get_wrapper_attr("config")) == "goalie"
+    goalie.close()
     assert default_policy(CONFIG) == "scan"
 
 
