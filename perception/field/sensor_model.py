@@ -34,17 +34,17 @@ map line). A line's pairs count only across the line, the two-of-three constrain
 is weighted by the inverse distance of the feature from the robot (at least
 ``min_weight_distance_m``).
 
-**Least squares step** (eqs. 1-5): with ``c`` the weighted centroid of the placed points ``p_i``,
-``J = [[0, -1], [1, 0]]`` and a selection ``S_i`` of the counted components, the step
-``(t_x, t_y, dtheta)`` minimises ``sum_i w_i |S_i (q_i - p_i - t - dtheta J (p_i - c))|^2``, the
-seed's linearised rotation (``sin dtheta ~ dtheta``, ``cos dtheta ~ 1``) about the centroid,
-solved by SVD least squares (:func:`numpy.linalg.lstsq`; the minimum-norm step leaves an
-unconstrained direction alone); the pose is then turned by ``dtheta`` about ``c`` exactly and
-moved by ``t``. The error ``e`` is the weighted mean of the squared residuals (eq. 1). The
-iterations stop once every item is matched and ``e`` falls below ``converged_rms_m²`` or has not
-fallen for two iterations, or after ``max_iterations``; a final RMS above ``accept_rms_m`` says
-the features do not fit together (a false detection, or a prior so poor that the match is
-wrong) and the observation is refused.
+**Least squares step** (eqs. 1-5): with ``c`` the weighted centroid of the placed points
+``p_i``, ``J = [[0, -1], [1, 0]]`` and a selection ``S_i`` of the counted components, the step
+``(t_x, t_y, dtheta)`` minimises ``sum_i w_i |S_i (q_i - p_i - t - dtheta J (p_i - c))|^2``,
+the seed's linearised rotation (``sin dtheta ~ dtheta``, ``cos dtheta ~ 1``) about the
+centroid, solved from its normal equations (:func:`numpy.linalg.lstsq`'s minimum-norm solution
+where a direction is not constrained, which it leaves alone); the pose is then turned by
+``dtheta`` about ``c`` exactly and moved by ``t``. The error ``e`` is the weighted mean of the
+squared residuals (eq. 1). The iterations stop once every item is matched and ``e`` falls below
+``converged_rms_m²`` or has not fallen for two iterations, or after ``max_iterations``; a final
+RMS above ``accept_rms_m`` says the features do not fit together (a false detection, or a prior
+so poor that the match is wrong) and the observation is refused.
 
 **Information**: first order at the final pose, from the features' covariances: each point
 pair's counted components ``S_i (pos + Rot(theta) f_i)`` with ``f_i`` the point in the robot
@@ -168,35 +168,6 @@ class MatchItem:
         """The nearest of its features' distances from the robot (m)."""
         return min(self.distances_m)
 
-    @cached_property
-    def targets(self) -> tuple[_Targets, ...]:
-        """Per feature: its candidates stacked once for :func:`_nearest`."""
-        return tuple(
-            _Targets.of([c[i] for c in self.candidates]) for i in range(len(self.features))
-        )
-
-
-@dataclass(frozen=True)
-class _Targets:
-    """One feature's C candidates, stacked: their ``points`` (C, P, 2) and ``directions``
-    (C,) (NaN: none), and, as segments from their first point, ``spans`` (C, 2) to the
-    second point and the spans' squared lengths ``span_sq`` (C,) (lines: P = 2)."""
-
-    points: FloatArray
-    directions: FloatArray
-    spans: FloatArray
-    span_sq: FloatArray
-
-    @classmethod
-    def of(cls, candidates: list[MapFeature]) -> _Targets:
-        """The stacked ``candidates`` (map features of one kind)."""
-        points = np.array([c.points for c in candidates])
-        directions = np.array([np.nan if c.direction is None else c.direction for c in candidates])
-        if points.shape[1] < 2:
-            return cls(points, directions, np.zeros((len(points), 2)), np.zeros(len(points)))
-        spans = points[:, 1] - points[:, 0]
-        return cls(points, directions, spans, np.einsum("ci,ci->c", spans, spans))
-
 
 @dataclass(frozen=True)
 class SensorModelResult:
@@ -231,7 +202,8 @@ def observe_pose(
     if config.starts == "hypotheses":
         fixing = [item for item in items if _fixes_pose(item)]
         starts += [_implied_pose(item, c, pose) for item in fixing for c in item.candidates]
-    runs = [_icp(items, start, config) for start in starts]
+    matcher = _Matcher(items, config)
+    runs = [_icp(matcher, start, config) for start in starts]
     least = min(run.rms for run in runs)
     # of the runs that fit best (the field's twin poses fit exactly as well), the nearest
     best = min(
@@ -259,25 +231,26 @@ class _Run:
     chosen: list[tuple[MapFeature, ...]]
 
 
-def _icp(items: list[MatchItem], start: FloatArray, config: SensorModelConfig) -> _Run:
-    """The hierarchical ICP from ``start`` (module docstring)."""
+def _icp(matcher: _Matcher, start: FloatArray, config: SensorModelConfig) -> _Run:
+    """The hierarchical ICP from ``start`` (module docstring) over the matcher's items."""
     pose = start
     errors: list[float] = []
-    chosen: list[tuple[MapFeature, ...]] = []
+    choice: tuple[int, ...] = ()
+    count = len(matcher.items)
     for iteration in range(1, config.max_iterations + 1):
-        included = items[: min(iteration, len(items))]
-        chosen = [_nearest(item, pose, config) for item in included]
-        pairs = _point_pairs(included, chosen, pose, config)
+        included = min(iteration, count)
+        choice = matcher.nearest(pose, included)
+        pairs, turns = matcher.pairs(choice, pose)
         pose = _step(pose, pairs)
-        if _turn_with_pose(included, chosen):  # the pairs at the new pose differ: made again
-            pairs = _point_pairs(included, chosen, pose, config)
+        if turns:  # the pairs at the new pose differ: made again
+            pairs, _ = matcher.pairs(choice, pose)
         errors.append(_error(pose, pairs))
-        if len(included) == len(items) and (
+        if included == count and (
             errors[-1] < config.converged_rms_m**2
             or (len(errors) >= 3 and errors[-1] >= min(errors[-3], errors[-2]))
         ):
             break
-    return _Run(pose, math.sqrt(errors[-1]), iteration, chosen)
+    return _Run(pose, math.sqrt(errors[-1]), iteration, matcher.chosen(choice))
 
 
 def _pose_distance(a: FloatArray, b: FloatArray, config: SensorModelConfig) -> float:
@@ -558,44 +531,220 @@ def _place(pose: FloatArray, points: FloatArray) -> FloatArray:
     return points @ np.array([[c, s], [-s, c]]) + pose[:2]
 
 
-def _segment_distances(points: FloatArray, segments: _Targets) -> FloatArray:
-    """Distances (P, C) from each of ``points`` (P, 2) to each of the C ``segments``."""
-    a, d = segments.points[:, 0], segments.spans
-    offsets = points[:, None] - a  # (P, C, 2)
-    t = np.clip(np.einsum("pci,ci->pc", offsets, d) / segments.span_sq, 0.0, 1.0)
-    gaps = points[:, None] - (a + t[..., None] * d)
-    return np.hypot(gaps[..., 0], gaps[..., 1])
+def _unit(angle: float) -> FloatArray:
+    return np.array([math.cos(angle), math.sin(angle)])
 
 
-def _costs(item: MatchItem, pose: FloatArray, config: SensorModelConfig) -> FloatArray:
-    """How far (C,) the item placed from ``pose`` lies from each of its candidates: a line's
-    ends' distances to the map segment; a point's distance plus its direction's difference
-    times ``direction_scale_m_per_rad`` (modulo pi for an axial one)."""
-    total = np.zeros(len(item.candidates))
-    for feature, targets in zip(item.features, item.targets, strict=True):
-        placed = _place(pose, feature.points)
-        if feature.kind == "line":
-            total += _segment_distances(placed, targets).sum(axis=0)
-            continue
-        total += np.hypot(*(placed[0] - targets.points[:, 0]).T)
-        if feature.direction is not None:
-            turn = feature.direction + pose[2] - targets.directions
-            if feature.kind in AXIAL_KINDS:
-                gap = np.abs(wrap_angle(2.0 * turn)) / 2
-            else:
-                gap = np.abs(wrap_angle(turn))
-            # a candidate without a direction (NaN) adds nothing (``gap`` is never infinite)
-            total += config.direction_scale_m_per_rad * np.where(np.isnan(gap), 0.0, gap)
-    return total
+@dataclass(frozen=True)
+class _Pairs:
+    """N point pairs: the features' points ``robot`` (N, 2) (robot frame), their map targets
+    ``q`` (N, 2) (field frame), the counted components ``mask`` (N, 2) (1 or 0) and the
+    weights ``w`` (N,)."""
+
+    robot: FloatArray
+    q: FloatArray
+    mask: FloatArray
+    w: FloatArray
 
 
-def _nearest(
-    item: MatchItem, pose: FloatArray, config: SensorModelConfig
-) -> tuple[MapFeature, ...]:
-    """The candidate nearest the item placed from ``pose`` (the first of equals)."""
-    if len(item.candidates) == 1:
-        return item.candidates[0]
-    return item.candidates[int(np.argmin(_costs(item, pose, config)))]
+@dataclass(frozen=True)
+class _PairLayout:
+    """The point pairs of one choice of candidates before the pose is known: ``pairs`` with
+    every axial arm at its map direction; per pair, ``flipped_q`` (N, 2), the arm's map
+    point for the opposite direction (``q`` elsewhere), and ``seen_direction`` and
+    ``map_direction`` (N,) (rad; NaN but for axial arms), which pick one of the two at a
+    pose; ``turns``: whether any pair is an axial arm (the pairs depend on the pose)."""
+
+    pairs: _Pairs
+    flipped_q: FloatArray
+    seen_direction: FloatArray
+    map_direction: FloatArray
+    turns: bool
+
+
+class _Matcher:
+    """One frame's items laid out once for the ICP's iterations (shared by its runs).
+
+    Each item's candidate ``c`` has the slot ``item * width + c`` (``width``: the most
+    candidates of an item). The matching costs (:func:`nearest`) come in one pass over every
+    (feature, candidate) row: a line's two ends' distances to the map segment (rows of
+    ``line_slots`` (R,), the seen ends ``line_ends`` (R, 2, 2), the segments' ``starts``
+    (R, 2), ``spans`` (R, 2) and ``span_sq`` (R,)); a point's distance plus its direction's
+    difference times ``direction_scale_m_per_rad`` (rows of ``point_slots`` (Q,), the seen
+    ``points`` (Q, 2) and ``directions`` (Q,) (NaN: none), the map ``targets`` (Q, 2) and
+    ``target_directions`` (Q,), ``axial`` (Q,)); empty slots cost infinity. The point pairs
+    of a choice of candidates are laid out once per choice (:func:`pairs`).
+    """
+
+    def __init__(self, items: list[MatchItem], config: SensorModelConfig) -> None:
+        self.items, self.config = items, config
+        self.width = max(len(item.candidates) for item in items)
+        self.empty = np.full(len(items) * self.width, math.inf)
+        line_slots: list[int] = []
+        line_ends: list[FloatArray] = []
+        segments: list[FloatArray] = []
+        point_slots: list[int] = []
+        points: list[FloatArray] = []
+        directions: list[float] = []
+        targets: list[FloatArray] = []
+        target_directions: list[float] = []
+        axial: list[bool] = []
+        for i, item in enumerate(items):
+            self.empty[i * self.width : i * self.width + len(item.candidates)] = 0.0
+            for k, feature in enumerate(item.features):
+                for c, candidate in enumerate(item.candidates):
+                    target = candidate[k]
+                    if feature.kind == "line":
+                        line_slots.append(i * self.width + c)
+                        line_ends.append(feature.points)
+                        segments.append(target.points)
+                        continue
+                    point_slots.append(i * self.width + c)
+                    points.append(feature.points[0])
+                    directions.append(_or_nan(feature.direction))
+                    targets.append(target.points[0])
+                    target_directions.append(_or_nan(target.direction))
+                    axial.append(feature.kind in AXIAL_KINDS)
+        self.line_slots = np.array(line_slots, dtype=np.intp)
+        self.line_ends = np.array(line_ends).reshape(-1, 2, 2)
+        segment_points = np.array(segments).reshape(-1, 2, 2)
+        self.starts = segment_points[:, 0]
+        self.spans = segment_points[:, 1] - segment_points[:, 0]
+        self.span_sq = self.spans[:, 0] * self.spans[:, 0] + self.spans[:, 1] * self.spans[:, 1]
+        self.point_slots = np.array(point_slots, dtype=np.intp)
+        self.points = np.array(points).reshape(-1, 2)
+        self.directions = np.array(directions)
+        self.targets = np.array(targets).reshape(-1, 2)
+        self.target_directions = np.array(target_directions)
+        self.axial = np.array(axial, dtype=bool)
+        self._layouts: dict[tuple[int, ...], _PairLayout] = {}  # per choice
+        self._slots: dict[tuple[int, int], _PairLayout] = {}  # per (item, candidate)
+
+    def nearest(self, pose: FloatArray, count: int) -> tuple[int, ...]:
+        """Per item of the first ``count``, the index of its candidate nearest the item placed
+        from ``pose`` (the first of equals)."""
+        costs = self.empty.copy()
+        if len(self.line_slots):
+            ends = _place(pose, self.line_ends.reshape(-1, 2)).reshape(-1, 2, 2)
+            offsets = ends - self.starts[:, None]  # (R, 2 ends, 2)
+            along = (
+                offsets[..., 0] * self.spans[:, None, 0] + offsets[..., 1] * self.spans[:, None, 1]
+            )
+            t = np.clip(along / self.span_sq[:, None], 0.0, 1.0)
+            gaps = ends - (self.starts[:, None] + t[..., None] * self.spans[:, None])
+            distances = np.hypot(gaps[..., 0], gaps[..., 1])
+            costs += np.bincount(
+                self.line_slots, distances[:, 0] + distances[:, 1], minlength=len(costs)
+            )
+        if len(self.point_slots):
+            placed = _place(pose, self.points)
+            distances = np.hypot(
+                placed[:, 0] - self.targets[:, 0], placed[:, 1] - self.targets[:, 1]
+            )
+            turn = self.directions + pose[2] - self.target_directions
+            gap = np.where(self.axial, np.abs(wrap_angle(2.0 * turn)) / 2, np.abs(wrap_angle(turn)))
+            # no direction on either side (NaN) adds nothing
+            scaled = self.config.direction_scale_m_per_rad * np.where(np.isnan(gap), 0.0, gap)
+            costs += np.bincount(self.point_slots, distances + scaled, minlength=len(costs))
+        return tuple(np.argmin(costs.reshape(-1, self.width)[:count], axis=1).tolist())
+
+    def chosen(self, choice: tuple[int, ...]) -> list[tuple[MapFeature, ...]]:
+        """The map features of a ``choice`` of candidate indices (one per leading item)."""
+        return [item.candidates[c] for item, c in zip(self.items, choice, strict=False)]
+
+    def pairs(self, choice: tuple[int, ...], pose: FloatArray) -> tuple[_Pairs, bool]:
+        """The point pairs (module docstring) of the first ``len(choice)`` items matched to
+        their ``choice`` of candidates at ``pose``, and whether they depend on the pose."""
+        layout = self._layouts.get(choice)
+        if layout is None:
+            layout = self._layouts[choice] = _joined(
+                [self._slot_layout(i, c) for i, c in enumerate(choice)]
+            )
+        if not layout.turns:
+            return layout.pairs, False
+        # an axial arm goes to the map direction nearer the placed feature's
+        turn = layout.seen_direction + pose[2] - layout.map_direction
+        flip = np.abs(wrap_angle(turn)) > math.pi / 2  # False where NaN: no axial arm
+        pairs = layout.pairs
+        q = np.where(flip[:, None], layout.flipped_q, pairs.q)
+        return _Pairs(pairs.robot, q, pairs.mask, pairs.w), True
+
+    def _slot_layout(self, i: int, c: int) -> _PairLayout:
+        """The point pairs of item ``i`` matched to its candidate ``c`` (made once)."""
+        key = (i, c)
+        if key in self._slots:
+            return self._slots[key]
+        item = self.items[i]
+        robot: list[FloatArray] = []
+        q: list[FloatArray] = []
+        flipped: list[FloatArray] = []
+        seen_direction: list[float] = []
+        map_direction: list[float] = []
+        mask: list[FloatArray] = []
+        w: list[float] = []
+        for feature, distance, target in zip(
+            item.features, item.distances_m, item.candidates[c], strict=True
+        ):
+            weight = _weight(distance, self.config)
+            if feature.kind == "line":
+                # lines run along x or y: count only the component across the line (eqs.
+                # 6-7), where an end's foot on the map line lies at the line's own coordinate
+                across = _across(target)
+                robot += [feature.points[0], feature.points[1]]
+                q += [target.points[0], target.points[0]]
+                flipped += [target.points[0], target.points[0]]
+                seen_direction += [math.nan, math.nan]
+                map_direction += [math.nan, math.nan]
+                mask += [across, across]
+                w += [weight, weight]
+                continue
+            robot.append(feature.points[0])
+            q.append(target.points[0])
+            flipped.append(target.points[0])
+            seen_direction.append(math.nan)
+            map_direction.append(math.nan)
+            mask.append(_BOTH)
+            w.append(weight)
+            if feature.direction is not None and target.direction is not None:
+                arm = self.config.junction_arm_m
+                robot.append(feature.points[0] + arm * _unit(feature.direction))
+                q.append(target.points[0] + arm * _unit(target.direction))
+                axial = feature.kind in AXIAL_KINDS
+                opposite = target.direction + math.pi
+                flipped.append(target.points[0] + arm * _unit(opposite) if axial else q[-1])
+                seen_direction.append(feature.direction if axial else math.nan)
+                map_direction.append(target.direction if axial else math.nan)
+                mask.append(_BOTH)
+                w.append(weight)
+        seen = np.array(seen_direction)
+        layout = self._slots[key] = _PairLayout(
+            _Pairs(np.array(robot), np.array(q), np.array(mask), np.array(w)),
+            np.array(flipped),
+            seen,
+            np.array(map_direction),
+            bool((~np.isnan(seen)).any()),
+        )
+        return layout
+
+
+def _joined(layouts: list[_PairLayout]) -> _PairLayout:
+    """The pairs of several layouts, in order."""
+    if len(layouts) == 1:
+        return layouts[0]
+    return _PairLayout(
+        _Pairs(*(np.concatenate([getattr(x.pairs, f) for x in layouts]) for f in _PAIR_FIELDS)),
+        np.concatenate([x.flipped_q for x in layouts]),
+        np.concatenate([x.seen_direction for x in layouts]),
+        np.concatenate([x.map_direction for x in layouts]),
+        any(x.turns for x in layouts),
+    )
+
+
+_PAIR_FIELDS = ("robot", "q", "mask", "w")
+
+
+def _or_nan(direction: float | None) -> float:
+    return math.nan if direction is None else direction
 
 
 def _direction(feature: FieldFeature | MapFeature) -> float:
@@ -634,93 +783,46 @@ def _implied_pose(
     return np.array([position[0], position[1], wrap_scalar(heading)])
 
 
-def _unit(angle: float) -> FloatArray:
-    return np.array([math.cos(angle), math.sin(angle)])
-
-
-@dataclass(frozen=True)
-class _Pairs:
-    """N point pairs: the features' points ``robot`` (N, 2) (robot frame), their map targets
-    ``q`` (N, 2) (field frame), the counted components ``mask`` (N, 2) (1 or 0) and the
-    weights ``w`` (N,)."""
-
-    robot: FloatArray
-    q: FloatArray
-    mask: FloatArray
-    w: FloatArray
-
-
-def _point_pairs(
-    items: list[MatchItem],
-    chosen: list[tuple[MapFeature, ...]],
-    pose: FloatArray,
-    config: SensorModelConfig,
-) -> _Pairs:
-    """The point pairs of ``items`` matched to ``chosen`` at ``pose`` (module docstring)."""
-    robot: list[FloatArray] = []
-    q: list[FloatArray] = []
-    mask: list[FloatArray] = []
-    w: list[float] = []
-    for item, targets in zip(items, chosen, strict=True):
-        for feature, distance, target in zip(item.features, item.distances_m, targets, strict=True):
-            weight = _weight(distance, config)
-            if feature.kind == "line":
-                # lines run along x or y: count only the component across the line (eqs. 6-7),
-                # where an end's foot on the map line lies at the line's own coordinate
-                across = _across(target)
-                robot += [feature.points[0], feature.points[1]]
-                q += [target.points[0], target.points[0]]
-                mask += [across, across]
-                w += [weight, weight]
-                continue
-            robot.append(feature.points[0])
-            q.append(target.points[0])
-            mask.append(_BOTH)
-            w.append(weight)
-            if feature.direction is not None and target.direction is not None:
-                arm = config.junction_arm_m
-                towards = target.direction
-                gap = abs(wrap_scalar(feature.direction + pose[2] - towards))
-                if feature.kind in AXIAL_KINDS and gap > math.pi / 2:
-                    towards += math.pi  # the map direction nearer the placed one
-                robot.append(feature.points[0] + arm * _unit(feature.direction))
-                q.append(target.points[0] + arm * _unit(towards))
-                mask.append(_BOTH)
-                w.append(weight)
-    return _Pairs(np.array(robot), np.array(q), np.array(mask), np.array(w))
-
-
-def _turn_with_pose(items: list[MatchItem], chosen: list[tuple[MapFeature, ...]]) -> bool:
-    """Whether the :func:`_point_pairs` of ``items`` matched to ``chosen`` depend on the pose:
-    only an axial feature's arm does (its map direction, or the opposite one, whichever is
-    nearer the placed feature's); every other pair is the same at any pose."""
-    return any(
-        feature.kind in AXIAL_KINDS
-        and feature.direction is not None
-        and target.direction is not None
-        for item, targets in zip(items, chosen, strict=True)
-        for feature, target in zip(item.features, targets, strict=True)
-    )
-
-
 def _step(pose: FloatArray, pairs: _Pairs) -> FloatArray:
     """One least-squares step (module docstring): the new pose."""
     p = _place(pose, pairs.robot)
     w = pairs.w
     centre = (w[:, None] * p).sum(axis=0) / w.sum()
-    # per pair and axis, the row (d t_x, d t_y, d dtheta) and its target, weighted; the
-    # counted ones in pair order
-    root = np.sqrt(w)
-    rows = np.zeros((len(w), 2, 3))
-    rows[:, 0, 0] = rows[:, 1, 1] = 1.0
-    rows[:, :, 2] = (p - centre) @ _J.T  # the levers
-    rows *= root[:, None, None]
-    targets = root[:, None] * (pairs.q - p)
-    counted = pairs.mask.astype(bool)
-    t_x, t_y, dtheta = np.linalg.lstsq(rows[counted], targets[counted], rcond=None)[0]
+    levers = (p - centre) @ _J.T  # (N, 2): d (placed point) / d dtheta
+    t_x, t_y, dtheta = _step_solution(w[:, None] * pairs.mask, levers, pairs.q - p)
     c, s = math.cos(dtheta), math.sin(dtheta)
     turned = centre + np.array([[c, -s], [s, c]]) @ (pose[:2] - centre) + np.array([t_x, t_y])
     return np.array([turned[0], turned[1], wrap_scalar(pose[2] + dtheta)])
+
+
+def _step_solution(
+    weights: FloatArray, levers: FloatArray, residuals: FloatArray
+) -> tuple[float, float, float]:
+    """``(t_x, t_y, dtheta)`` minimising ``sum_i,a weights[i, a] (residuals[i, a] - t_a -
+    dtheta levers[i, a])^2`` (each (N, 2); a weight 0 leaves a component out).
+
+    The normal equations have the block form ``[[S_x, 0, L_x], [0, S_y, L_y], [L_x, L_y,
+    L]]`` (per axis the weights' sum ``S_a`` and their moments of the levers ``L_a``):
+    ``dtheta`` from its Schur complement, then each translation; an axis without a counted
+    component (lines along it only) gets no translation, the minimum-norm choice. When the
+    turn is not pinned down (levers under a micrometre: one point), the minimum-norm solution
+    of :func:`numpy.linalg.lstsq` instead."""
+    columns = np.stack([np.ones_like(levers), levers, residuals], axis=2)  # (N, 2, 3)
+    moments = np.einsum("na,nai,naj->aij", weights, columns, columns)  # (2, 3, 3)
+    axes = [row for row in moments[:, :2].tolist() if row[0][0] > 0.0]  # S_a, L_a, B_a; ...
+    schur = sum(ll - lv * lv / w for (w, lv, _), (_, ll, _) in axes)
+    if schur > 1e-12 * max(w for (w, _, _), _ in axes):
+        dtheta = sum(bl - lv * b / w for (w, lv, b), (_, _, bl) in axes) / schur
+        shift = [(b - lv * dtheta) / w if w > 0.0 else 0.0 for w, lv, b in moments[:, 0].tolist()]
+        return shift[0], shift[1], dtheta
+    root = np.sqrt(weights)
+    rows = np.zeros((len(levers), 2, 3))
+    rows[:, 0, 0] = rows[:, 1, 1] = 1.0
+    rows[:, :, 2] = levers
+    rows *= root[..., None]
+    counted = weights > 0.0
+    solution = np.linalg.lstsq(rows[counted], (root * residuals)[counted], rcond=None)[0]
+    return float(solution[0]), float(solution[1]), float(solution[2])
 
 
 def _error(pose: FloatArray, pairs: _Pairs) -> float:

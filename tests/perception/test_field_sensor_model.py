@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 
+from perception.field import sensor_model
 from perception.field.dimensions import FieldDimensions
 from perception.field.features import FieldFeature
 from perception.field.field_map import FieldMap, MapFeature
@@ -266,3 +267,47 @@ def test_a_start_per_candidate_finds_the_pose_or_its_twin_from_anywhere() -> Non
 def test_a_missing_field_map_is_a_type_error_naming_it() -> None:
     with pytest.raises(TypeError, match="field_map must be a FieldMap, got NoneType"):
         observe_pose([], np.zeros(3), None, CONFIG)  # type: ignore[arg-type]
+
+
+def _lstsq_step(weights: np.ndarray, levers: np.ndarray, residuals: np.ndarray) -> np.ndarray:
+    """The step by SVD least squares over the counted rows (the oracle)."""
+    rows, targets = [], []
+    for i in range(len(levers)):
+        for axis in (0, 1):
+            if weights[i, axis] > 0.0:
+                row = np.zeros(3)
+                row[axis], row[2] = 1.0, levers[i, axis]
+                rows.append(math.sqrt(weights[i, axis]) * row)
+                targets.append(math.sqrt(weights[i, axis]) * residuals[i, axis])
+    return np.linalg.lstsq(np.array(rows), np.array(targets), rcond=None)[0]
+
+
+@pytest.mark.parametrize("counted", ["both", "y_only", "x_only", "mixed"])
+def test_the_step_is_the_minimum_norm_least_squares_solution(counted: str) -> None:
+    """The closed-form step equals SVD least squares; an axis with no counted component (lines
+    along it only) gets no translation, as the minimum-norm solution gives it."""
+    rng = np.random.default_rng(5)
+    n = 6
+    weights = rng.uniform(0.2, 2.0, (n, 2))
+    if counted == "y_only":
+        weights[:, 0] = 0.0
+    elif counted == "x_only":
+        weights[:, 1] = 0.0
+    elif counted == "mixed":
+        weights[: n // 2, 0] = 0.0
+        weights[n // 2 :, 1] = 0.0
+    levers = rng.normal(0.0, 1.0, (n, 2))
+    residuals = rng.normal(0.0, 0.1, (n, 2))
+    got = np.array(sensor_model._step_solution(weights, levers, residuals))
+    np.testing.assert_allclose(got, _lstsq_step(weights, levers, residuals), atol=1e-12)
+    if counted in ("y_only", "x_only"):
+        assert got[0 if counted == "y_only" else 1] == 0.0
+
+
+def test_one_point_pins_the_translation_and_leaves_the_turn_alone() -> None:
+    """A single point pair (its lever zero about the centroid) says nothing of the turn: the
+    step moves the point onto its target and turns by nothing."""
+    weights = np.array([[1.5, 1.5]])
+    residuals = np.array([[0.3, -0.2]])
+    got = sensor_model._step_solution(weights, np.zeros((1, 2)), residuals)
+    np.testing.assert_allclose(got, [0.3, -0.2, 0.0], atol=1e-15)
