@@ -850,12 +850,18 @@ def _information(
         for feature, distance, target in zip(item.features, item.distances_m, targets, strict=True):
             w = _weight(distance, config)
             if feature.kind == "line":
-                normal = _across(target)
-                for end, cov in zip(feature.points, feature.cov, strict=True):
-                    rows.append(normal @ np.hstack([np.eye(2), (_J @ turn @ end)[:, None]]))
+                # per end, the component across the map line: its row (n, n . J Rot f) and its
+                # variance (Rot^T n)^T C (Rot^T n), in floats
+                n_x, n_y = _across(target).tolist()
+                u_x, u_y = c * n_x + s * n_y, c * n_y - s * n_x  # Rot^T n
+                for (f_x, f_y), ((c_xx, c_xy), (c_yx, c_yy)) in zip(
+                    feature.points.tolist(), feature.cov.tolist(), strict=True
+                ):
+                    lever = -n_x * (s * f_x + c * f_y) + n_y * (c * f_x - s * f_y)
+                    rows.append(np.array([n_x, n_y, lever]))
                     weights.append(w)
                     sources.append({len(noise): 1.0})
-                    noise.append(float(normal @ turn @ cov @ turn.T @ normal))
+                    noise.append(u_x * u_x * c_xx + u_x * u_y * (c_xy + c_yx) + u_y * u_y * c_yy)
                 continue
             # the vertex's error (two independent sources along the eigenvectors of its
             # field-frame covariance) and, for a directed feature, the direction's
@@ -888,10 +894,21 @@ def _information(
     # order, which sums them as the matrix products did, to the last bit)
     error_cov = (B * np.array(noise)) @ B.T
     normal = np.ascontiguousarray(A.T * W) @ A
-    normal_inverse = np.linalg.pinv(normal, rcond=1e-10, hermitian=True)
+    normal_inverse = _pseudo_inverse(normal)
     cov = ((((normal_inverse @ A.T) * W) @ error_cov) * W) @ A @ normal_inverse
-    information = np.linalg.pinv(0.5 * (cov + cov.T), rcond=1e-10, hermitian=True)
+    information = _pseudo_inverse(0.5 * (cov + cov.T))
     return 0.5 * (information + information.T)
+
+
+def _pseudo_inverse(matrix: FloatArray) -> FloatArray:
+    """The pseudo-inverse of a symmetric ``matrix`` (n, n): its eigenvalues of magnitude
+    above 1e-10 of the largest inverted, the others (a direction without information) 0,
+    as :func:`numpy.linalg.pinv` with ``rcond=1e-10, hermitian=True``."""
+    values, vectors = np.linalg.eigh(matrix)
+    magnitude = np.abs(values)
+    kept = magnitude > 1e-10 * magnitude.max()
+    inverse = np.divide(1.0, values, out=np.zeros_like(values), where=kept)
+    return np.asarray((vectors * inverse) @ vectors.T, dtype=np.float64)
 
 
 def _weight(distance_m: float, config: SensorModelConfig) -> float:

@@ -282,8 +282,11 @@ def visible_features(
     view = _View(robot, camera, state, config)
     samples = _samples(field_map, config.sample_m)
     seen = view.sees(samples.points)
+    any_seen = np.logical_or.reduceat(seen, samples.starts)  # per map feature
     found = []
-    for feature, part in zip(field_map.features, samples.parts, strict=True):
+    for feature, part, in_view in zip(field_map.features, samples.parts, any_seen, strict=True):
+        if not in_view:  # most of the map, from any pose
+            continue
         if feature.kind in SEGMENT_KINDS:
             stretch = _longest_stretch(samples.points[part], seen[part], config.min_line_m)
             if stretch is not None:
@@ -306,11 +309,12 @@ class _Samples:
     """The ground points (field frame) :func:`visible_features` tests on one map, stacked:
     ``points`` (N, 2); ``parts``, per map feature in map order, the slice of ``points`` that
     is its own (a segment's points every ``sample_m`` from end to end, the centre circle's 180
-    rim points, a point feature's point); ``crossings``, the indices of the map's X
-    junctions."""
+    rim points, a point feature's point), and ``starts`` (F,) their first indices;
+    ``crossings``, the indices of the map's X junctions."""
 
     points: FloatArray
     parts: tuple[slice, ...]
+    starts: NDArray[np.intp]
     crossings: tuple[int, ...]
 
 
@@ -337,6 +341,7 @@ def _samples(field_map: FieldMap, sample_m: float) -> _Samples:
     return _Samples(
         points=points,
         parts=tuple(slice(int(a), int(b)) for a, b in itertools.pairwise(ends)),
+        starts=np.asarray(ends[:-1], dtype=np.intp),
         crossings=tuple(k for k, f in enumerate(field_map.features) if f.kind == "x_junction"),
     )
 
@@ -345,10 +350,8 @@ def _longest_stretch(
     samples: FloatArray, seen: NDArray[np.bool_], min_line_m: float
 ) -> FloatArray | None:
     """The ends (2, 2) (field frame) of the longest run of a segment's ``samples`` (N, 2)
-    in view (``seen`` (N,)), the first of equals, or None when it is shorter than
-    ``min_line_m`` (or a single sample)."""
-    if not seen.any():  # most of the map, from any pose
-        return None
+    in view (``seen`` (N,), at least one True), the first of equals, or None when it is
+    shorter than ``min_line_m`` (or a single sample)."""
     step = np.diff(np.concatenate([[0], seen.astype(np.int8), [0]]))
     starts, stops = np.flatnonzero(step == 1), np.flatnonzero(step == -1)
     best = int(np.argmax(stops - starts))  # the first of the longest runs
