@@ -381,20 +381,22 @@ class _View:
     def sees(self, points: FloatArray) -> NDArray[np.bool_]:
         """Which field-frame ground ``points`` (N, 2) are in view (N,) bool."""
         robot = self.robot_points(np.atleast_2d(points))
-        ground = np.column_stack([robot, np.zeros(len(robot))])
+        seen = np.hypot(robot[:, 0], robot[:, 1]) <= self.config.max_range_m
+        near = robot[seen]  # only these are projected: most of the map is out of range
+        ground = np.column_stack([near, np.zeros(len(near))])
         in_camera = (ground - self.state.position) @ self.rotation
         cam = self.camera
         uv, front = project_points(in_camera, cam.fx, cam.fy, cam.cx, cam.cy)
         m = self.config.margin_px
         with np.errstate(invalid="ignore"):
-            inside = (
+            seen[seen] = (
                 front
                 & (uv[:, 0] >= m)
                 & (uv[:, 0] <= cam.width - 1 - m)
                 & (uv[:, 1] >= m)
                 & (uv[:, 1] <= cam.height - 1 - m)
             )
-        return inside & (np.hypot(robot[:, 0], robot[:, 1]) <= self.config.max_range_m)
+        return seen
 
     def feature(
         self, feature: MapFeature, points: FloatArray, rng: np.random.Generator | None
