@@ -56,6 +56,9 @@ DIRECTION_KINDS: tuple[str, ...] = tuple(
     k for k in FEATURE_KINDS if k in DIRECTED_KINDS or k == "centre_circle"
 )
 
+_EYE2 = np.eye(2)  # isotropic covariances: each point's variance times this (read-only)
+_EYE2.flags.writeable = False
+
 # DetectorModel's defaults: fitted by benchmarks/fit_geometric_field_features.py on 3000
 # rendered frames of NoPoles patrols (tuning seeds 0-4, 30 s each under the head scan and under
 # random head targets), benchmarks/results/geometric_field_features.json ("model"). With the
@@ -352,7 +355,9 @@ def _longest_stretch(
     """The ends (2, 2) (field frame) of the longest run of a segment's ``samples`` (N, 2)
     in view (``seen`` (N,), at least one True), the first of equals, or None when it is
     shorter than ``min_line_m`` (or a single sample)."""
-    step = np.diff(np.concatenate([[0], seen.astype(np.int8), [0]]))
+    padded = np.zeros(len(seen) + 2, dtype=np.int8)
+    padded[1:-1] = seen
+    step = np.diff(padded)
     starts, stops = np.flatnonzero(step == 1), np.flatnonzero(step == -1)
     best = int(np.argmax(stops - starts))  # the first of the longest runs
     if stops[best] - starts[best] < 2:
@@ -410,7 +415,7 @@ class _View:
             robot = robot + rng.normal(0.0, 1.0, robot.shape) * std[:, None]
             if direction is not None:
                 direction += float(rng.normal(0.0, cfg.direction_std_rad))
-        cov = np.einsum("n,ij->nij", std**2, np.eye(2))
+        cov = (std**2)[:, None, None] * _EYE2
         direction_std = math.nan if direction is None else cfg.direction_std_rad
         # the map's own feature, placed: valid by construction (a finite point set, std > 0)
         return FieldFeature.trusted(feature.kind, robot, cov, direction, direction_std)
@@ -429,7 +434,7 @@ def detected_features(
             continue
         points, direction = found
         std = model.std_at(f.kind, np.hypot(f.points[:, 0], f.points[:, 1]))
-        cov = np.einsum("n,ij->nij", std**2, np.eye(2))
+        cov = (std**2)[:, None, None] * _EYE2
         if direction is None:
             out.append(FieldFeature(f.kind, points, cov))
         else:
