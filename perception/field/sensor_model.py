@@ -566,20 +566,21 @@ class _Matcher:
     """One frame's items laid out once for the ICP's iterations (shared by its runs).
 
     Each item's candidate ``c`` has the slot ``item * width + c`` (``width``: the most
-    candidates of an item). The matching costs (:func:`nearest`) come in one pass over every
+    candidates of an item). The matching costs (:meth:`nearest`) come in one pass over every
     (feature, candidate) row: a line's two ends' distances to the map segment (rows of
     ``line_slots`` (R,), the seen ends ``line_ends`` (R, 2, 2), the segments' ``starts``
     (R, 2), ``spans`` (R, 2) and ``span_sq`` (R,)); a point's distance plus its direction's
     difference times ``direction_scale_m_per_rad`` (rows of ``point_slots`` (Q,), the seen
     ``points`` (Q, 2) and ``directions`` (Q,) (NaN: none), the map ``targets`` (Q, 2) and
-    ``target_directions`` (Q,), ``axial`` (Q,)); empty slots cost infinity. The point pairs
-    of a choice of candidates are laid out once per choice (:func:`pairs`).
+    ``target_directions`` (Q,), ``axial`` (Q,)), added to ``base_costs`` (0, or infinity for an
+    empty slot). The point pairs
+    of a choice of candidates are laid out once per choice (:meth:`pairs`).
     """
 
     def __init__(self, items: list[MatchItem], config: SensorModelConfig) -> None:
         self.items, self.config = items, config
         self.width = max(len(item.candidates) for item in items)
-        self.empty = np.full(len(items) * self.width, math.inf)
+        self.base_costs = np.full(len(items) * self.width, math.inf)
         line_slots: list[int] = []
         line_ends: list[FloatArray] = []
         segments: list[FloatArray] = []
@@ -590,7 +591,7 @@ class _Matcher:
         target_directions: list[float] = []
         axial: list[bool] = []
         for i, item in enumerate(items):
-            self.empty[i * self.width : i * self.width + len(item.candidates)] = 0.0
+            self.base_costs[i * self.width : i * self.width + len(item.candidates)] = 0.0
             for k, feature in enumerate(item.features):
                 for c, candidate in enumerate(item.candidates):
                     target = candidate[k]
@@ -623,7 +624,7 @@ class _Matcher:
     def nearest(self, pose: FloatArray, count: int) -> tuple[int, ...]:
         """Per item of the first ``count``, the index of its candidate nearest the item placed
         from ``pose`` (the first of equals)."""
-        costs = self.empty.copy()
+        costs = self.base_costs.copy()
         if len(self.line_slots):
             ends = _place(pose, self.line_ends.reshape(-1, 2)).reshape(-1, 2, 2)
             offsets = ends - self.starts[:, None]  # (R, 2 ends, 2)
