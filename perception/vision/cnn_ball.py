@@ -14,7 +14,11 @@ Per ``ball`` detection scoring at least ``score_threshold`` (:func:`ball_sightin
 3. a box whose width says the ball is much nearer or farther than that (the apparent diameter
    ``2 r f / d`` off by more than ``size_tolerance`` of itself) is dropped: something round and
    white that is not the ball on the ground (a robot's part, a ball in the air);
-4. the covariance propagates an independent pixel noise of std
+4. a box whose centre lies on our own body's silhouette (``body``,
+   :mod:`perception.vision.body_contour`) is dropped: the head turned to the side and pitched
+   down shows the top camera its own grey shoulder, which the CNN can take for the ball (and a
+   ball there would be hidden behind it);
+5. the covariance propagates an independent pixel noise of std
    ``hypot(pixel_std_px * downscale, pixel_std_per_size * box width)`` on the centre's ``u``
    and ``v`` (``downscale``: the image was read at that fraction of its resolution)
    (:func:`perception.vision.ground_point.range_bearing_cov`).
@@ -27,7 +31,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -35,12 +39,14 @@ import numpy as np
 from perception.geometry import FloatArray
 from perception.types import BallSighting, CameraModel, CameraState
 from perception.validation import (
+    InvalidTypeError,
     check_in_interval,
     check_int,
     check_positive,
     check_probability,
     finite_vector,
 )
+from perception.vision.body_contour import BodyContourConfig, body_silhouettes, on_body
 from perception.vision.field_pixels import GroundProjection
 from perception.vision.ground_point import height_point, range_bearing_cov
 
@@ -76,6 +82,8 @@ class CnnBallConfig:
     # ball near the feet is larger than any the CNN saw in training: at full resolution it
     # finds 5 % of the balls nearer than 0.3 m, at half 82 %; rendered bottom-camera frames)
     bottom_downscale: int = 2
+    # Our own body's boxes, whose silhouettes no ball sighting may lie on; None: not checked
+    body: BodyContourConfig | None = field(default_factory=BodyContourConfig)
 
     def __post_init__(self) -> None:
         check_probability(_OWNER, "score_threshold", self.score_threshold, float_only=True)
@@ -86,6 +94,10 @@ class CnnBallConfig:
         check_positive(_OWNER, "size_tolerance", self.size_tolerance)
         check_in_interval(_OWNER, "row_offset_px", self.row_offset_px, -5.0, 5.0)
         check_int(_OWNER, "bottom_downscale", self.bottom_downscale, 1)
+        if self.body is not None and not isinstance(self.body, BodyContourConfig):
+            raise InvalidTypeError(
+                f"{_OWNER}.body must be a BodyContourConfig or None, got {type(self.body).__name__}"
+            )
 
     def pixel_std(self, box: FloatArray, downscale: int = 1) -> float:
         """Std (px) of the centre of a box (4,) ``(u0, v0, u1, v1)`` found in the image read at
@@ -110,13 +122,21 @@ def ball_sightings(
     Raises ValueError if such a detection's box is not 4 finite numbers.
     """
     found = []
+    body: list[FloatArray] | None = None  # our body's silhouettes, made at the first ball box
     for k, detection in enumerate(detections):
         if detection.class_name != BALL_CLASS or detection.score < config.score_threshold:
             continue
         box = finite_vector(detection.box, f"detections[{k}].box", 4)
         sighting = _box_sighting(box, float(detection.score), camera, state, config, downscale)
-        if sighting is not None:
-            found.append(sighting)
+        if sighting is None:
+            continue
+        if config.body is not None:
+            if body is None:
+                body = body_silhouettes(config.body, camera, state)
+            centre = np.array([(box[0] + box[2]) / 2, (box[1] + box[3]) / 2 + config.row_offset_px])
+            if on_body(centre, body, config.body.margin_px):
+                continue
+        found.append(sighting)
     return tuple(sorted(found, key=lambda s: -s.score))
 
 
@@ -143,7 +163,7 @@ def _box_sighting(
     config: CnnBallConfig,
     downscale: int,
 ) -> BallSighting | None:
-    """Steps 1-4 of the module doc for one ball box (4,)."""
+    """Steps 1-3 and 5 of the module doc for one ball box (4,)."""
     if not (box[2] > box[0] and box[3] > box[1]) or _cut_off(box, camera, config):
         return None
     centre = np.array([(box[0] + box[2]) / 2, (box[1] + box[3]) / 2 + config.row_offset_px])

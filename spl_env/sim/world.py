@@ -691,15 +691,18 @@ def _floor_depth(
     rows = np.flatnonzero((ends[0] < 0) | (ends[1] < 0))
     w = _outer_sum(w_col[rows], w_row)
     d = [_outer_sum(col[rows], row) for col, row in zip(d_col, d_row, strict=True)]
-    r = np.float32(-eye[2]) / d[2]  # the ray meets z = 0 at eye + r * d
-    s = r * w  # ... this far along the ray to the far plane (eye depth s * far)
-    hx, hy = floor.half_extents
-    seen = (
-        (s >= near / far)
-        & (s <= 1.0)
-        & (np.abs(eye[0] + r * d[0]) <= hx)
-        & (np.abs(eye[1] + r * d[1]) <= hy)
-    )
+    # a ray parallel to the floor (d_z = 0 on a row that descends at one end) never meets it:
+    # its r is infinite (or NaN), which every test below refuses
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = np.float32(-eye[2]) / d[2]  # the ray meets z = 0 at eye + r * d
+        s = r * w  # ... this far along the ray to the far plane (eye depth s * far)
+        hx, hy = floor.half_extents
+        seen = (
+            (s >= near / far)
+            & (s <= 1.0)
+            & (np.abs(eye[0] + r * d[0]) <= hx)
+            & (np.abs(eye[1] + r * d[1]) <= hy)
+        )
     depth = np.ones((height, width), dtype=np.float32)
     floor_depth = (far - near / np.where(seen, s, 1.0)) / (far - near)  # as pybullet's buffer
     depth[rows] = np.where(seen, floor_depth, 1.0)

@@ -19,6 +19,7 @@ from perception.types import CameraModel, CameraState
 from perception.validation import InvalidTypeError
 from perception.vision.cnn_ball import BALL_CLASS, CnnBallConfig, ball_in_view, ball_sightings
 from perception.vision.cnn_detector import OBJECT_CLASSES, Detection
+from perception.vision.ground_point import height_point
 
 CAMERA = CameraModel()
 RADIUS = 0.05
@@ -257,6 +258,26 @@ def test_range_and_bearing_variance_match_the_closed_form_on_the_centre_column(
 # --- configuration ------------------------------------------------------------------------------
 
 
+def test_a_ball_box_on_our_own_shoulder_is_dropped() -> None:
+    """The head turned to its right limit and pitched down shows the top camera its own right
+    arm across the image's lower part: a ball-sized box there (the size a ball would have where
+    its centre's ray meets the ball's plane) is our body, not a ball, unless the body check is
+    off (``body=None``)."""
+    yaw = -1.55
+    state = CameraState(
+        position=np.array([0.059 * math.cos(yaw), 0.059 * math.sin(yaw), 0.49]),
+        head_yaw=yaw,
+        head_pitch=0.46,
+    )
+    point = height_point(np.array([CAMERA.cx, CAMERA.height - 28.0]), RADIUS, CAMERA, state)
+    assert point is not None
+    box = ball_box(*point, state)
+    assert ball_sightings([detection(box)], CAMERA, state, CONFIG) == ()
+    unchecked = dataclasses.replace(CONFIG, body=None)
+    (kept,) = ball_sightings([detection(box)], CAMERA, state, unchecked)
+    assert kept.range_m == pytest.approx(point[0], abs=1e-9)
+
+
 @pytest.mark.parametrize(
     ("field", "value", "error"),
     [
@@ -277,6 +298,7 @@ def test_range_and_bearing_variance_match_the_closed_form_on_the_centre_column(
         ("row_offset_px", math.nan, ValueError),
         ("bottom_downscale", 0, ValueError),
         ("bottom_downscale", 2.0, InvalidTypeError),
+        ("body", "arms", InvalidTypeError),
     ],
 )
 def test_config_rejects_bad_values(field: str, value: object, error: type[Exception]) -> None:
