@@ -12,7 +12,7 @@ image); :func:`on_body` tells whether an image point lies on one (``margin_px`` 
 edge still counts).
 
 :data:`NAO_BODY` is the simulated Nao's body (``spl_env.robots.nao``: legs, waistband, jersey
-and upper arms; ``tests/spl_env/test_body_contour.py`` holds the two to each other); a real
+and upper arms; ``tests/spl_env/test_body_contour_rendered.py`` holds the two to each other); a real
 robot's contour would be measured on it.
 """
 
