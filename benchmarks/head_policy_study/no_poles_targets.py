@@ -25,13 +25,12 @@ import gymnasium as gym
 import numpy as np
 
 import spl_env  # noqa: F401  (registers the env ids)
-from agents.baselines import HeadScan
+from agents.baselines import HeadScan, LookAtStalest
 from agents.evaluate import episode_metrics, run_episode
 from benchmarks.head_policies import interval
 from spl_env.config import EnvConfig
 
 ENV_ID = "SPL/ActiveVision-NoPoles-v1"
-REACH_MARGIN_RAD = math.radians(14.0)  # as LookAtStalest: the target inside the image's middle
 # field points (m, field frame) of each look-at policy
 TARGETS: dict[str, tuple[tuple[float, float], ...]] = {
     "look_at_centre": ((0.0, 0.0),),
@@ -62,7 +61,7 @@ class LookAtPoint(HeadScan):
         x_scaled, y_scaled, cos_t, sin_t = (float(v) for v in obs["self_pose_field"])
         x, y = x_scaled * self.half_carpet_m[0], y_scaled * self.half_carpet_m[1]
         heading = math.atan2(sin_t, cos_t)
-        reach = self.robot.head_yaw_limit_rad + REACH_MARGIN_RAD
+        reach = self.robot.head_yaw_limit_rad + LookAtStalest.reach_margin_rad
         best: tuple[float, float] | None = None  # (distance, bearing)
         for tx, ty in self.targets:
             bearing = math.remainder(math.atan2(ty - y, tx - x) - heading, math.tau)

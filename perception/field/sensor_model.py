@@ -38,13 +38,14 @@ is weighted by the inverse distance of the feature from the robot (at least
 ``p_i``, ``J = [[0, -1], [1, 0]]`` and a selection ``S_i`` of the counted components, the step
 ``(t_x, t_y, dtheta)`` minimises ``sum_i w_i |S_i (q_i - p_i - t - dtheta J (p_i - c))|^2``,
 the seed's linearised rotation (``sin dtheta ~ dtheta``, ``cos dtheta ~ 1``) about the
-centroid, solved from its normal equations (:func:`numpy.linalg.lstsq`'s minimum-norm solution
-where a direction is not constrained, which it leaves alone); the pose is then turned by
-``dtheta`` about ``c`` exactly and moved by ``t``. The error ``e`` is the weighted mean of the
-squared residuals (eq. 1). The iterations stop once every item is matched and ``e`` falls below
-``converged_rms_m²`` or has not fallen for two iterations, or after ``max_iterations``; a final
-RMS above ``accept_rms_m`` says the features do not fit together (a false detection, or a prior
-so poor that the match is wrong) and the observation is refused.
+centroid, solved from its normal equations in closed form (the minimum-norm step where a
+direction is not constrained, which it leaves alone); the pose is then turned by ``dtheta``
+about ``c`` exactly and moved by ``t``. The error ``e`` is the weighted mean of the squared
+residuals (eq. 1). The iterations stop once every item is matched and ``e`` falls below
+``converged_rms_m²`` or has not fallen for two iterations, or after ``max_iterations`` (the
+items matched by then make the observation); a final RMS above ``accept_rms_m`` says the
+features do not fit together (a false detection, or a prior so poor that the match is wrong)
+and the observation is refused.
 
 **Information**: first order at the final pose, from the features' covariances: each point
 pair's counted components ``S_i (pos + Rot(theta) f_i)`` with ``f_i`` the point in the robot
@@ -214,8 +215,9 @@ def observe_pose(
     iterations = sum(run.iterations for run in runs)
     if best.rms > config.accept_rms_m:
         return SensorModelResult(None, best.pose, best.rms, iterations, matches)
-    information = _information(items, best.chosen, best.pose, config)
-    features_used = sum(len(i.features) for i in items)
+    matched = items[: len(best.chosen)]  # all, unless max_iterations stopped it first
+    information = _information(matched, best.chosen, best.pose, config)
+    features_used = sum(len(i.features) for i in matched)
     observation = PoseObservation(best.pose, information, best.rms, features_used)
     return SensorModelResult(observation, best.pose, best.rms, iterations, matches)
 
@@ -532,6 +534,7 @@ def _place(pose: FloatArray, points: FloatArray) -> FloatArray:
 
 
 def _unit(angle: float) -> FloatArray:
+    """The unit vector (2,) at ``angle`` (rad)."""
     return np.array([math.cos(angle), math.sin(angle)])
 
 
@@ -745,6 +748,7 @@ _PAIR_FIELDS = ("robot", "q", "mask", "w")
 
 
 def _or_nan(direction: float | None) -> float:
+    """``direction`` (rad), NaN for none."""
     return math.nan if direction is None else direction
 
 
@@ -800,30 +804,26 @@ def _step_solution(
     weights: FloatArray, levers: FloatArray, residuals: FloatArray
 ) -> tuple[float, float, float]:
     """``(t_x, t_y, dtheta)`` minimising ``sum_i,a weights[i, a] (residuals[i, a] - t_a -
-    dtheta levers[i, a])^2`` (each (N, 2); a weight 0 leaves a component out).
+    dtheta levers[i, a])^2`` (each (N, 2); a weight 0 leaves a component out; at least one
+    weight > 0, else ValueError).
 
     The normal equations have the block form ``[[S_x, 0, L_x], [0, S_y, L_y], [L_x, L_y,
     L]]`` (per axis the weights' sum ``S_a`` and their moments of the levers ``L_a``):
-    ``dtheta`` from its Schur complement, then each translation; an axis without a counted
-    component (lines along it only) gets no translation, the minimum-norm choice. When the
-    turn is not pinned down (levers under a micrometre: one point), the minimum-norm solution
-    of :func:`numpy.linalg.lstsq` instead."""
+    ``dtheta`` from its Schur complement, then each translation. The minimum-norm choice
+    where nothing pins a parameter down: an axis without a counted component (lines along
+    it only) gets no translation, and a turn whose Schur complement is under 1e-12 of the
+    largest ``S_a`` (levers within a micrometre of each other: one point) none."""
     columns = np.stack([np.ones_like(levers), levers, residuals], axis=2)  # (N, 2, 3)
     moments = np.einsum("na,nai,naj->aij", weights, columns, columns)  # (2, 3, 3)
     axes = [row for row in moments[:, :2].tolist() if row[0][0] > 0.0]  # S_a, L_a, B_a; ...
+    if not axes:
+        raise ValueError("weights must hold at least one value > 0, got none")
     schur = sum(ll - lv * lv / w for (w, lv, _), (_, ll, _) in axes)
+    dtheta = 0.0
     if schur > 1e-12 * max(w for (w, _, _), _ in axes):
         dtheta = sum(bl - lv * b / w for (w, lv, b), (_, _, bl) in axes) / schur
-        shift = [(b - lv * dtheta) / w if w > 0.0 else 0.0 for w, lv, b in moments[:, 0].tolist()]
-        return shift[0], shift[1], dtheta
-    root = np.sqrt(weights)
-    rows = np.zeros((len(levers), 2, 3))
-    rows[:, 0, 0] = rows[:, 1, 1] = 1.0
-    rows[:, :, 2] = levers
-    rows *= root[..., None]
-    counted = weights > 0.0
-    solution = np.linalg.lstsq(rows[counted], (root * residuals)[counted], rcond=None)[0]
-    return float(solution[0]), float(solution[1]), float(solution[2])
+    shift = [(b - lv * dtheta) / w if w > 0.0 else 0.0 for w, lv, b in moments[:, 0].tolist()]
+    return shift[0], shift[1], dtheta
 
 
 def _error(pose: FloatArray, pairs: _Pairs) -> float:
@@ -909,7 +909,8 @@ def _pseudo_inverse(matrix: FloatArray) -> FloatArray:
     magnitude = np.abs(values)
     kept = magnitude > 1e-10 * magnitude.max()
     inverse = np.divide(1.0, values, out=np.zeros_like(values), where=kept)
-    return np.asarray((vectors * inverse) @ vectors.T, dtype=np.float64)
+    inverted: FloatArray = (vectors * inverse) @ vectors.T
+    return inverted
 
 
 def _weight(distance_m: float, config: SensorModelConfig) -> float:

@@ -338,6 +338,8 @@ def _samples(field_map: FieldMap, sample_m: float) -> _Samples:
             chunks.append(feature.points[0] + rim)
         else:
             chunks.append(feature.points[:1])
+    # no part is empty (a segment has 2 samples or more, the circle 180, a point 1): the
+    # reduceat over ``starts`` in visible_features counts on it
     ends = np.cumsum([0, *(len(c) for c in chunks)])
     points = np.concatenate(chunks)
     points.flags.writeable = False

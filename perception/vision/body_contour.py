@@ -30,6 +30,10 @@ from perception.types import CameraModel, CameraState
 from perception.validation import InvalidTypeError, check_positive
 
 NEAR_M = 0.01  # a box's part behind the camera is clipped this far (m) in front of it
+# the 12 edges of a box as pairs of corner indices (corners differing in one axis's bit)
+_EDGES: tuple[tuple[int, int], ...] = tuple(
+    (a, a | (1 << axis)) for axis in range(3) for a in range(8) if not a & (1 << axis)
+)
 
 
 @dataclass(frozen=True)
@@ -43,12 +47,15 @@ class BodyBox:
     def __post_init__(self) -> None:
         for name in ("centre_m", "half_extents_m"):
             value = getattr(self, name)
-            if not (
-                isinstance(value, tuple)
-                and len(value) == 3
-                and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
-                and all(math.isfinite(v) for v in value)
+            if not isinstance(value, tuple) or not all(
+                isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
+                for v in value
             ):
+                raise InvalidTypeError(
+                    f"BodyBox.{name} must be a tuple of 3 numbers, got {type(value).__name__} "
+                    f"{value!r}"
+                )
+            if len(value) != 3 or not all(math.isfinite(v) for v in value):
                 raise ValueError(f"BodyBox.{name} must be 3 finite numbers, got {value!r}")
         if min(self.half_extents_m) <= 0:
             raise ValueError(f"BodyBox.half_extents_m must be > 0, got {self.half_extents_m}")
@@ -82,7 +89,8 @@ class BodyContourConfig:
     def __post_init__(self) -> None:
         if not isinstance(self.boxes, tuple) or not all(isinstance(b, BodyBox) for b in self.boxes):
             raise InvalidTypeError(
-                f"BodyContourConfig.boxes must be a tuple of BodyBox, got {self.boxes!r}"
+                "BodyContourConfig.boxes must be a tuple of BodyBox, got "
+                f"{type(self.boxes).__name__}"
             )
         check_positive("BodyContourConfig", "margin_px", self.margin_px, allow_zero=True)
 
@@ -121,9 +129,3 @@ def on_body(pixel: FloatArray, silhouettes: list[FloatArray], margin_px: float) 
         cv2.pointPolygonTest(s.astype(np.float32).reshape(-1, 1, 2), point, True) >= -margin_px
         for s in silhouettes
     )
-
-
-# the 12 edges of a box as pairs of corner indices (corners differing in one axis's bit)
-_EDGES: tuple[tuple[int, int], ...] = tuple(
-    (a, a | (1 << axis)) for axis in range(3) for a in range(8) if not a & (1 << axis)
-)

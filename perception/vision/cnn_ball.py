@@ -133,8 +133,7 @@ def ball_sightings(
         if config.body is not None:
             if body is None:
                 body = body_silhouettes(config.body, camera, state)
-            centre = np.array([(box[0] + box[2]) / 2, (box[1] + box[3]) / 2 + config.row_offset_px])
-            if on_body(centre, body, config.body.margin_px):
+            if on_body(_box_centre(box, config), body, config.body.margin_px):
                 continue
         found.append(sighting)
     return tuple(sorted(found, key=lambda s: -s.score))
@@ -166,7 +165,7 @@ def _box_sighting(
     """Steps 1-3 and 5 of the module doc for one ball box (4,)."""
     if not (box[2] > box[0] and box[3] > box[1]) or _cut_off(box, camera, config):
         return None
-    centre = np.array([(box[0] + box[2]) / 2, (box[1] + box[3]) / 2 + config.row_offset_px])
+    centre = _box_centre(box, config)
     point = height_point(centre, config.radius_m, camera, state)
     if point is None:
         return None
@@ -185,6 +184,12 @@ def _box_sighting(
     return BallSighting(
         range_m=range_m, bearing_rad=bearing_rad, cov=cov, box=box.copy(), score=score
     )
+
+
+def _box_centre(box: FloatArray, config: CnnBallConfig) -> FloatArray:
+    """The centre (2,) px of a box (4,) in the camera model's pixels: moved
+    ``config.row_offset_px`` down (the renderer draws rows that much higher)."""
+    return np.array([(box[0] + box[2]) / 2, (box[1] + box[3]) / 2 + config.row_offset_px])
 
 
 def _cut_off(box: FloatArray, camera: CameraModel, config: CnnBallConfig) -> bool:

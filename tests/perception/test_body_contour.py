@@ -71,13 +71,11 @@ def test_the_nao_sees_its_shoulder_only_with_the_head_turned_and_down() -> None:
     pitched down, its right arm fills the image's lower part."""
     ahead = CameraState(position=np.array([0.059, 0.0, 0.52]), head_yaw=0.0, head_pitch=0.3)
     config = BodyContourConfig()
-    inside = [
-        p
-        for s in body_silhouettes(config, CAMERA, ahead)
-        for p in s
-        if 0 <= p[0] < CAMERA.width and 0 <= p[1] < CAMERA.height
-    ]
-    assert inside == []
+    rows, columns = np.mgrid[0 : CAMERA.height : 4, 0 : CAMERA.width : 4]
+    grid = np.column_stack([columns.ravel(), rows.ravel()]).astype(float)
+    looking_ahead = body_silhouettes(config, CAMERA, ahead)
+    assert looking_ahead  # the body lies in front of the camera's plane, below the image
+    assert not any(on_body(p, looking_ahead, 0.0) for p in grid)
     yaw = -1.55
     turned = CameraState(
         position=np.array([0.059 * math.cos(yaw), 0.059 * math.sin(yaw), 0.49]),
@@ -105,6 +103,15 @@ def test_the_default_body_is_the_simulated_naos() -> None:
 def test_bad_boxes_are_refused(centre: tuple[float, ...], half: tuple[float, ...]) -> None:
     with pytest.raises(ValueError, match="BodyBox"):
         BodyBox(centre, half)  # type: ignore[arg-type]
+
+
+def test_boxes_of_numpy_numbers_are_accepted_and_of_other_types_refused() -> None:
+    box = BodyBox((np.float64(0.1), np.float32(0.0), 1), (0.1, 0.1, np.float64(0.2)))
+    assert box.corners().shape == (8, 3)
+    with pytest.raises(InvalidTypeError, match=r"BodyBox\.centre_m"):
+        BodyBox([0.0, 0.0, 0.0], (0.1, 0.1, 0.1))  # type: ignore[arg-type]
+    with pytest.raises(InvalidTypeError, match=r"BodyBox\.half_extents_m"):
+        BodyBox((0.0, 0.0, 0.0), (0.1, "0.1", 0.1))  # type: ignore[arg-type]
 
 
 def test_bad_contour_configs_are_refused() -> None:

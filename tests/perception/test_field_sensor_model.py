@@ -304,10 +304,87 @@ def test_the_step_is_the_minimum_norm_least_squares_solution(counted: str) -> No
         assert got[0 if counted == "y_only" else 1] == 0.0
 
 
-def test_one_point_pins_the_translation_and_leaves_the_turn_alone() -> None:
-    """A single point pair (its lever zero about the centroid) says nothing of the turn: the
-    step moves the point onto its target and turns by nothing."""
-    weights = np.array([[1.5, 1.5]])
-    residuals = np.array([[0.3, -0.2]])
-    got = sensor_model._step_solution(weights, np.zeros((1, 2)), residuals)
-    np.testing.assert_allclose(got, [0.3, -0.2, 0.0], atol=1e-15)
+@pytest.mark.parametrize("lever_m", [0.0, 1e-9])
+def test_one_point_pins_the_translation_and_leaves_the_turn_alone(lever_m: float) -> None:
+    """A single point pair (its lever zero about the centroid, or rounding's nanometre) says
+    nothing of the turn: the step moves the point onto its target and turns by nothing."""
+    weights = np.array([[1.5, 1.5], [0.5, 0.5]])
+    residuals = np.array([[0.3, -0.2], [0.3, -0.2]])
+    levers = np.array([[lever_m, -lever_m], [0.0, 0.0]])
+    got = sensor_model._step_solution(weights, levers, residuals)
+    np.testing.assert_allclose(got, [0.3, -0.2, 0.0], atol=1e-12)
+
+
+def test_a_step_without_counted_components_is_refused() -> None:
+    with pytest.raises(ValueError, match="weights"):
+        sensor_model._step_solution(np.zeros((2, 2)), np.ones((2, 2)), np.ones((2, 2)))
+
+
+def test_stopping_before_every_item_is_matched_observes_from_the_matched_ones() -> None:
+    """With fewer iterations than items the ICP stops before the last items join: the
+    observation comes from the items matched by then (here the first two: the corner and the
+    goal post, one feature each)."""
+    config = SensorModelConfig(max_iterations=2)
+    features = rich_view()
+    assert len(match_items(features, FIELD, config)) > 2
+    result = observe_pose(features, TRUTH + np.array([0.05, -0.03, 0.02]), FIELD, config)
+    assert result.observation is not None
+    assert result.observation.features == 2
+    assert len(result.matches) == 2
+
+
+def test_the_pseudo_inverse_is_numpys_on_a_rank_deficient_matrix() -> None:
+    """Lines along one axis say nothing along it: the normal matrix has a zero direction,
+    which the pseudo-inverse leaves at zero as numpy's does."""
+    rng = np.random.default_rng(2)
+    a = rng.normal(size=(6, 3))
+    a[:, 0] = 0.0  # no row constrains x
+    normal = a.T @ a
+    np.testing.assert_allclose(
+        sensor_model._pseudo_inverse(normal),
+        np.linalg.pinv(normal, rcond=1e-10, hermitian=True),
+        atol=1e-12,
+    )
+
+
+def test_each_item_takes_its_nearest_candidate_the_first_of_equals() -> None:
+    """The matcher's one-pass costs pick, per item, the candidate a per-item search picks:
+    the nearest (line ends' distances to the map segment; a point's distance plus its
+    direction's difference), the first of equals, over items of 1 to many candidates."""
+    rng = np.random.default_rng(4)
+    items = match_items(rich_view(rng=rng), FIELD, CONFIG)
+    assert {len(item.candidates) for item in items} >= {1} and max(
+        len(item.candidates) for item in items
+    ) > 1
+    matcher = sensor_model._Matcher(items, CONFIG)
+    for _ in range(20):
+        pose = TRUTH + rng.normal(0.0, [0.5, 0.5, 0.3])
+        expected = tuple(
+            int(np.argmin([brute_cost(item, c, pose) for c in item.candidates])) for item in items
+        )
+        assert matcher.nearest(pose, len(items)) == expected
+
+
+def brute_cost(
+    item: sensor_model.MatchItem, candidate: tuple[MapFeature, ...], pose: np.ndarray
+) -> float:
+    """The matching cost of ``item`` placed from ``pose`` against ``candidate``, by hand."""
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    total = 0.0
+    for feature, target in zip(item.features, candidate, strict=True):
+        placed = feature.points @ np.array([[c, s], [-s, c]]) + pose[:2]
+        if feature.kind == "line":
+            a, b = target.points
+            for p in placed:
+                t = min(max(float((p - a) @ (b - a)) / float((b - a) @ (b - a)), 0.0), 1.0)
+                total += float(np.hypot(*(p - a - t * (b - a))))
+            continue
+        total += float(np.hypot(*(placed[0] - target.points[0])))
+        if feature.direction is not None and target.direction is not None:
+            turn = feature.direction + pose[2] - target.direction
+            if feature.kind in ("x_junction", "centre_circle"):
+                gap = abs(float(wrap_angle(2.0 * turn))) / 2
+            else:
+                gap = abs(float(wrap_angle(turn)))
+            total += CONFIG.direction_scale_m_per_rad * gap
+    return total

@@ -53,7 +53,7 @@ def test_our_arm_shows_where_its_silhouette_says() -> None:
     kernel = np.ones((2 * BAND_PX + 1, 2 * BAND_PX + 1), dtype=np.uint8)
     inside = cv2.erode(mask, kernel).astype(bool)
     outside = ~cv2.dilate(mask, kernel).astype(bool)
-    outside[: model.height // 2] = False  # the carpet's green below the horizon
+    outside[: model.height // 2] = False  # the image's lower half: only carpet beside the arm
     assert inside.sum() > 2000  # the arm fills much of the image's lower part
     grey = 255 * np.array(NAO_GREY[:3])
     colour_gap = np.abs(image.astype(float) - grey).max(axis=2)
