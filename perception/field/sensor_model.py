@@ -576,50 +576,49 @@ class _Matcher:
     difference times ``direction_scale_m_per_rad`` (rows of ``point_slots`` (Q,), the seen
     ``points`` (Q, 2) and ``directions`` (Q,) (NaN: none), the map ``targets`` (Q, 2) and
     ``target_directions`` (Q,), ``axial`` (Q,)), added to ``base_costs`` (0, or infinity for an
-    empty slot). The point pairs
-    of a choice of candidates are laid out once per choice (:meth:`pairs`).
+    empty slot). The point pairs of a choice of candidates are laid out once per choice
+    (:meth:`pairs`).
     """
 
     def __init__(self, items: list[MatchItem], config: SensorModelConfig) -> None:
         self.items, self.config = items, config
         self.width = max(len(item.candidates) for item in items)
         self.base_costs = np.full(len(items) * self.width, math.inf)
-        line_slots: list[int] = []
-        line_ends: list[FloatArray] = []
-        segments: list[FloatArray] = []
-        point_slots: list[int] = []
-        points: list[FloatArray] = []
-        directions: list[float] = []
-        targets: list[FloatArray] = []
-        target_directions: list[float] = []
-        axial: list[bool] = []
+        lines: list[tuple[int, FloatArray, FloatArray]] = []  # slot, seen ends, map segment
+        points: list[tuple[int, FloatArray, float, FloatArray, float, bool]] = []
         for i, item in enumerate(items):
             self.base_costs[i * self.width : i * self.width + len(item.candidates)] = 0.0
             for k, feature in enumerate(item.features):
                 for c, candidate in enumerate(item.candidates):
-                    target = candidate[k]
+                    slot, target = i * self.width + c, candidate[k]
                     if feature.kind == "line":
-                        line_slots.append(i * self.width + c)
-                        line_ends.append(feature.points)
-                        segments.append(target.points)
+                        lines.append((slot, feature.points, target.points))
                         continue
-                    point_slots.append(i * self.width + c)
-                    points.append(feature.points[0])
-                    directions.append(_or_nan(feature.direction))
-                    targets.append(target.points[0])
-                    target_directions.append(_or_nan(target.direction))
-                    axial.append(feature.kind in AXIAL_KINDS)
+                    points.append(
+                        (
+                            slot,
+                            feature.points[0],
+                            _or_nan(feature.direction),
+                            target.points[0],
+                            _or_nan(target.direction),
+                            feature.kind in AXIAL_KINDS,
+                        )
+                    )
+        line_slots, line_ends, segments = zip(*lines, strict=True) if lines else ((), (), ())
         self.line_slots = np.array(line_slots, dtype=np.intp)
         self.line_ends = np.array(line_ends).reshape(-1, 2, 2)
         segment_points = np.array(segments).reshape(-1, 2, 2)
         self.starts = segment_points[:, 0]
         self.spans = segment_points[:, 1] - segment_points[:, 0]
         self.span_sq = self.spans[:, 0] * self.spans[:, 0] + self.spans[:, 1] * self.spans[:, 1]
-        self.point_slots = np.array(point_slots, dtype=np.intp)
-        self.points = np.array(points).reshape(-1, 2)
-        self.directions = np.array(directions)
+        slots, seen, directions, targets, target_directions, axial = (
+            zip(*points, strict=True) if points else ((), (), (), (), (), ())
+        )
+        self.point_slots = np.array(slots, dtype=np.intp)
+        self.points = np.array(seen).reshape(-1, 2)
+        self.directions = np.array(directions, dtype=np.float64)
         self.targets = np.array(targets).reshape(-1, 2)
-        self.target_directions = np.array(target_directions)
+        self.target_directions = np.array(target_directions, dtype=np.float64)
         self.axial = np.array(axial, dtype=bool)
         self._layouts: dict[tuple[int, ...], _PairLayout] = {}  # per choice
         self._slots: dict[tuple[int, int], _PairLayout] = {}  # per (item, candidate)
@@ -679,54 +678,41 @@ class _Matcher:
         if key in self._slots:
             return self._slots[key]
         item = self.items[i]
-        robot: list[FloatArray] = []
-        q: list[FloatArray] = []
-        flipped: list[FloatArray] = []
-        seen_direction: list[float] = []
-        map_direction: list[float] = []
-        mask: list[FloatArray] = []
-        w: list[float] = []
+        # per pair: robot point, map point, the map point of the opposite direction, the seen
+        # and map directions (NaN but for an axial arm), counted components, weight
+        rows: list[tuple[FloatArray, FloatArray, FloatArray, float, float, FloatArray, float]]
+        rows = []
         for feature, distance, target in zip(
             item.features, item.distances_m, item.candidates[c], strict=True
         ):
             weight = _weight(distance, self.config)
+            q = target.points[0]
             if feature.kind == "line":
                 # lines run along x or y: count only the component across the line (eqs.
                 # 6-7), where an end's foot on the map line lies at the line's own coordinate
                 across = _across(target)
-                robot += [feature.points[0], feature.points[1]]
-                q += [target.points[0], target.points[0]]
-                flipped += [target.points[0], target.points[0]]
-                seen_direction += [math.nan, math.nan]
-                map_direction += [math.nan, math.nan]
-                mask += [across, across]
-                w += [weight, weight]
+                rows += [(end, q, q, math.nan, math.nan, across, weight) for end in feature.points]
                 continue
-            robot.append(feature.points[0])
-            q.append(target.points[0])
-            flipped.append(target.points[0])
-            seen_direction.append(math.nan)
-            map_direction.append(math.nan)
-            mask.append(_BOTH)
-            w.append(weight)
+            rows.append((feature.points[0], q, q, math.nan, math.nan, _BOTH, weight))
             if feature.direction is not None and target.direction is not None:
                 arm = self.config.junction_arm_m
-                robot.append(feature.points[0] + arm * _unit(feature.direction))
-                q.append(target.points[0] + arm * _unit(target.direction))
-                axial = feature.kind in AXIAL_KINDS
-                opposite = target.direction + math.pi
-                flipped.append(target.points[0] + arm * _unit(opposite) if axial else q[-1])
-                seen_direction.append(feature.direction if axial else math.nan)
-                map_direction.append(target.direction if axial else math.nan)
-                mask.append(_BOTH)
-                w.append(weight)
-        seen = np.array(seen_direction)
+                end = feature.points[0] + arm * _unit(feature.direction)
+                arm_q = q + arm * _unit(target.direction)
+                if feature.kind in AXIAL_KINDS:
+                    flipped = q + arm * _unit(target.direction + math.pi)
+                    rows.append(
+                        (end, arm_q, flipped, feature.direction, target.direction, _BOTH, weight)
+                    )
+                else:
+                    rows.append((end, arm_q, arm_q, math.nan, math.nan, _BOTH, weight))
+        robot, qs, flipped_q, seen, mapped, mask, w = zip(*rows, strict=True)
+        seen_direction = np.array(seen, dtype=np.float64)
         layout = self._slots[key] = _PairLayout(
-            _Pairs(np.array(robot), np.array(q), np.array(mask), np.array(w)),
-            np.array(flipped),
-            seen,
-            np.array(map_direction),
-            bool((~np.isnan(seen)).any()),
+            _Pairs(np.array(robot), np.array(qs), np.array(mask), np.array(w)),
+            np.array(flipped_q),
+            seen_direction,
+            np.array(mapped, dtype=np.float64),
+            bool((~np.isnan(seen_direction)).any()),
         )
         return layout
 

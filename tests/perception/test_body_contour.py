@@ -10,7 +10,6 @@ import pytest
 from perception.types import CameraModel, CameraState
 from perception.validation import InvalidTypeError
 from perception.vision.body_contour import (
-    NAO_BODY,
     BodyBox,
     BodyContourConfig,
     body_silhouettes,
@@ -85,11 +84,6 @@ def test_the_nao_sees_its_shoulder_only_with_the_head_turned_and_down() -> None:
     silhouettes = body_silhouettes(config, CAMERA, turned)
     assert on_body(np.array([CAMERA.cx, CAMERA.height - 10.0]), silhouettes, 0.0)
     assert not on_body(np.array([CAMERA.cx, 10.0]), silhouettes, 0.0)
-
-
-def test_the_default_body_is_the_simulated_naos() -> None:
-    assert BodyContourConfig().boxes == NAO_BODY
-    assert len(NAO_BODY) == 6
 
 
 @pytest.mark.parametrize(
