@@ -17,7 +17,10 @@ tuning seeds, the maximum-likelihood pixel noise ``hypot(a, b * box width)`` of 
 against the projection of the ball's true centre (:class:`perception.vision.cnn_ball.CnnBallConfig`
 takes it), and the geometric emulator's numbers
 (:data:`spl_env.sensors.emulation.ball.CNN_BALL`: recall and relative range / bearing noise
-per band).
+per band). The flat-box check (``CnnBallConfig.min_shading_std``) judges each box's middle
+shading, measured at render time; ``tuning_unjudged`` and ``held_out_unjudged`` are the same
+frames without the check (what it costs in recall), ``shading_quantiles_tuning`` the
+shading of the visible balls' best boxes.
 
     python benchmarks/ball_detection.py                     # tuning 0-4 and held-out 100-104
     python benchmarks/ball_detection.py --camera bottom     # the bottom camera, half resolution
@@ -43,7 +46,7 @@ import torch
 import spl_env  # noqa: F401  (registers the env ids)
 from perception.geometry import project_points, range_bearing, wrap_angle
 from perception.pipeline import PipelineConfig
-from perception.vision.cnn_ball import BALL_CLASS, CnnBallConfig, ball_sightings
+from perception.vision.cnn_ball import BALL_CLASS, CnnBallConfig, ball_sightings, middle_shading
 from spl_env.envs.core import SplEnv
 from spl_env.robots.nao import camera_state_for
 from spl_env.sensors.camera import Camera
@@ -98,7 +101,11 @@ def frames(
             if camera_name == "top"
             else detector.detect_objects_downscaled(image, pipeline.cnn_ball.bottom_downscale)
         )
-        boxes = [(d.box.tolist(), d.score) for d in found if d.class_name == BALL_CLASS]
+        boxes = [
+            (d.box.tolist(), d.score, middle_shading(image, d.box, pipeline.cnn_ball))
+            for d in found
+            if d.class_name == BALL_CLASS
+        ]
         records.append(
             {
                 "state": camera_state_for(ours.config, ours.head, camera_name),
@@ -136,14 +143,17 @@ def evaluate(
         for _ in range(len(edges) + 1)
     ]
     false_sightings = 0
+    floor = config.min_shading_std
+    unjudged = dataclasses.replace(config, min_shading_std=None)  # judged here, from the records
     for r in records:
         detections = [
             Detection(
                 class_name=BALL_CLASS, class_id=1, box=np.array(b), score=s, keypoint=np.zeros(2)
             )
-            for b, s in r["boxes"]
+            for b, s, shading in r["boxes"]
+            if floor is None or shading is None or shading >= floor
         ]
-        sightings = ball_sightings(detections, model, r["state"], config, downscale)
+        sightings = ball_sightings(detections, model, r["state"], unjudged, downscale, image=None)
         visible = r["pixels"] >= MIN_PIXELS
         band = bands[int(np.searchsorted(edges, r["range_m"], side="right"))]
         if not visible:
@@ -198,7 +208,7 @@ def fit_pixel_noise(records: list[dict[str, Any]], config: CnnBallConfig) -> dic
     for r in records:
         if r["pixels"] < MIN_PIXELS or not r["boxes"] or not np.all(np.isfinite(r["centre_px"])):
             continue
-        box, score = max(r["boxes"], key=lambda b: b[1])
+        box, score, _ = max(r["boxes"], key=lambda b: b[1])
         if score < config.score_threshold:
             continue
         centre = np.array([(box[0] + box[2]) / 2, (box[1] + box[3]) / 2])
@@ -216,6 +226,26 @@ def fit_pixel_noise(records: list[dict[str, Any]], config: CnnBallConfig) -> dic
             nll = float(np.sum(2 * np.log(var) + e2 / var))
             best = min(best, (nll, float(a), float(b)))
     return {"boxes": len(w), "pixel_std_px": best[1], "pixel_std_per_size": best[2]}
+
+
+def shading_quantiles(records: list[dict[str, Any]]) -> dict[str, Any]:
+    """Quantiles (0, 1, 5, 50 %) of the middle shading (:func:`middle_shading`) of the best
+    box of each visible ball whose centre lies within half its width of the true centre's
+    pixel, and the number of boxes too small to judge."""
+    values, unjudged = [], 0
+    for r in records:
+        if r["pixels"] < MIN_PIXELS or not r["boxes"] or not np.all(np.isfinite(r["centre_px"])):
+            continue
+        box, _, shading = max(r["boxes"], key=lambda b: b[1])
+        centre = np.array([(box[0] + box[2]) / 2, (box[1] + box[3]) / 2])
+        if np.hypot(*(centre - np.array(r["centre_px"]))) > 0.5 * (box[2] - box[0]):
+            continue
+        if shading is None:
+            unjudged += 1
+        else:
+            values.append(shading)
+    quantiles = np.percentile(values, [0, 1, 5, 50]).tolist() if values else None
+    return {"judged": len(values), "unjudged": unjudged, "quantiles_0_1_5_50": quantiles}
 
 
 def _mean(values: list[float]) -> float | None:
@@ -251,6 +281,7 @@ def main() -> None:
         pixel_std_px=fit["pixel_std_px"] / downscale,  # the model scales the floor back up
         pixel_std_per_size=fit["pixel_std_per_size"],
     )
+    no_flatness = dataclasses.replace(config, min_shading_std=None)
     result = {
         "setting": {
             "frames_per_seed": args.frames,
@@ -265,6 +296,10 @@ def main() -> None:
         "tuning": evaluate(tuning, config, model, edges, downscale),
         "held_out": evaluate(held_out, config, model, edges, downscale),
         "held_out_with_fit": evaluate(held_out, fitted, model, edges, downscale),
+        # the flat-box check off (cnn_ball step 5): what it costs in recall, what it drops
+        "tuning_unjudged": evaluate(tuning, no_flatness, model, edges, downscale),
+        "held_out_unjudged": evaluate(held_out, no_flatness, model, edges, downscale),
+        "shading_quantiles_tuning": shading_quantiles(tuning),
         "run_s": time.perf_counter() - start,
     }
     args.out.mkdir(parents=True, exist_ok=True)

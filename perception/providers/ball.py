@@ -22,17 +22,22 @@ from perception.vision.cnn_detector import CnnDetectorConfig
 
 class CnnBallSightings(Provider):
     """Ball sightings from the CNN's ``ball`` detections (:mod:`perception.vision.cnn_ball`):
-    the ray through each box's centre meets the plane of the ball's centre."""
+    the ray through each box's centre meets the plane of the ball's centre; flat boxes (a
+    painted mark) are looked at in the image and dropped."""
 
     provides = BALL_SIGHTINGS
-    requires: ClassVar[tuple[str, ...]] = (IMAGE_DETECTIONS, "camera", "camera_state")
+    requires: ClassVar[tuple[str, ...]] = (IMAGE_DETECTIONS, "image", "camera", "camera_state")
 
     def __init__(self, config: CnnBallConfig) -> None:
         self.config = config
 
     def update(self, inputs: Mapping[str, Any], time_s: float) -> tuple[BallSighting, ...]:
         return ball_sightings(
-            inputs[IMAGE_DETECTIONS], inputs["camera"], inputs["camera_state"], self.config
+            inputs[IMAGE_DETECTIONS],
+            inputs["camera"],
+            inputs["camera_state"],
+            self.config,
+            image=inputs["image"],
         )
 
 
@@ -42,7 +47,14 @@ class TwoCameraCnnBallSightings(CnnBallSightings):
     at the feet, which the top one cannot (nearer than about 0.35 m). Both cameras' sightings,
     best score first."""
 
-    requires = (IMAGE_DETECTIONS, "camera", "camera_state", "bottom_image", "bottom_camera_state")
+    requires = (
+        IMAGE_DETECTIONS,
+        "image",
+        "camera",
+        "camera_state",
+        "bottom_image",
+        "bottom_camera_state",
+    )
 
     def __init__(
         self, config: CnnBallConfig, cnn: CnnDetectorConfig, context: PerceptionContext
@@ -60,6 +72,7 @@ class TwoCameraCnnBallSightings(CnnBallSightings):
             inputs["bottom_camera_state"],
             self.config,
             self.config.bottom_downscale,
+            image=inputs["bottom_image"],
         )
         both = super().update(inputs, time_s) + bottom
         return tuple(sorted(both, key=lambda s: -s.score))

@@ -18,7 +18,13 @@ Per ``ball`` detection scoring at least ``score_threshold`` (:func:`ball_sightin
    :mod:`perception.vision.body_contour`) is dropped: the head turned to the side and pitched
    down shows the top camera its own grey shoulder, which the CNN can take for the ball (and a
    ball there would be hidden behind it);
-5. the covariance propagates an independent pixel noise of std
+5. a box whose middle is flat (:func:`middle_shading`: the luminance of its middle half varies
+   with a std under ``min_shading_std`` grey levels) is dropped: a lit sphere shades from its
+   lit side to its dark one, a painted penalty mark (the bottom camera at the feet takes it
+   for the ball) or a flat grey plate does not; boxes under ``min_judged_px`` across (too
+   small to judge) and over-exposed middles (``clipped_luminance``: flat because clipped)
+   are kept;
+6. the covariance propagates an independent pixel noise of std
    ``hypot(pixel_std_px * downscale, pixel_std_per_size * box width)`` on the centre's ``u``
    and ``v`` (``downscale``: the image was read at that fraction of its resolution)
    (:func:`perception.vision.ground_point.range_bearing_cov`).
@@ -35,6 +41,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import NDArray
 
 from perception.geometry import FloatArray
 from perception.types import BallSighting, CameraModel, CameraState
@@ -84,6 +91,17 @@ class CnnBallConfig:
     bottom_downscale: int = 2
     # Our own body's boxes, whose silhouettes no ball sighting may lie on; None: not checked
     body: BodyContourConfig | None = field(default_factory=BodyContourConfig)
+    # A box's middle half whose luminance (mean of R, G, B; 0-255) varies less than this (std)
+    # is flat, not the ball; None: not checked. Fitted on the CNN's ball boxes of the
+    # rendered striker's bottom camera, tuning seeds 0-15 (benchmarks/ball_flatness.py): the
+    # penalty mark's at most 1.2 in 95 % (the camera's noise), the ball's at least 12.5 but a
+    # flat robot part's; under randomised lighting (benchmarks/ball_detection.py, tuning seeds
+    # 0-4) a ball lit mostly by ambient light shades less: 1-2 % of them under 3.
+    min_shading_std: float | None = 3.0
+    min_judged_px: float = 8.0  # boxes narrower or lower than this (px) are not judged
+    # A middle whose median luminance reaches this is over-exposed (flat because clipped at
+    # 255, ball or mark): not judged
+    clipped_luminance: float = 250.0
 
     def __post_init__(self) -> None:
         check_probability(_OWNER, "score_threshold", self.score_threshold, float_only=True)
@@ -94,6 +112,12 @@ class CnnBallConfig:
         check_positive(_OWNER, "size_tolerance", self.size_tolerance)
         check_in_interval(_OWNER, "row_offset_px", self.row_offset_px, -5.0, 5.0)
         check_int(_OWNER, "bottom_downscale", self.bottom_downscale, 1)
+        if self.min_shading_std is not None:
+            check_positive(_OWNER, "min_shading_std", self.min_shading_std)
+        check_positive(_OWNER, "min_judged_px", self.min_judged_px)
+        check_positive(
+            _OWNER, "clipped_luminance", self.clipped_luminance, upper=255.0, upper_inclusive=True
+        )
         if self.body is not None and not isinstance(self.body, BodyContourConfig):
             raise InvalidTypeError(
                 f"{_OWNER}.body must be a BodyContourConfig or None, got {type(self.body).__name__}"
@@ -113,14 +137,27 @@ def ball_sightings(
     state: CameraState,
     config: CnnBallConfig,
     downscale: int = 1,
+    *,
+    image: NDArray[np.uint8] | None,
 ) -> tuple[BallSighting, ...]:
-    """Sightings (robot frame) of the ball among ``detections`` (the CNN's, any classes) in a
-    frame of ``camera`` taken from ``state`` and read at 1/``downscale`` resolution: one per
-    ``ball`` detection scoring at least ``config.score_threshold`` that the module doc's steps
-    keep, best score first.
+    """Sightings (robot frame) of the ball among ``detections`` (the CNN's, any classes) in
+    ``image`` (H, W, 3) uint8 RGB, a frame of ``camera`` taken from ``state`` and read at
+    1/``downscale`` resolution (boxes in ``image``'s pixels): one per ``ball`` detection
+    scoring at least ``config.score_threshold`` that the module doc's steps keep, best score
+    first. ``image`` may be None only where ``config.min_shading_std`` is None (nothing to
+    look at).
 
-    Raises ValueError if such a detection's box is not 4 finite numbers.
+    Raises ValueError if such a detection's box is not 4 finite numbers, or if ``image`` is
+    needed and None or not of the camera's size.
     """
+    if config.min_shading_std is not None:
+        shape = (camera.height, camera.width, 3)
+        if image is None or image.shape != shape or image.dtype != np.uint8:
+            raise ValueError(
+                f"image must be a {shape} uint8 RGB array to judge flat boxes "
+                f"(CnnBallConfig.min_shading_std), got "
+                f"{'None' if image is None else f'{image.shape} {image.dtype}'}"
+            )
     found = []
     body: list[FloatArray] | None = None  # our body's silhouettes, made at the first ball box
     for k, detection in enumerate(detections):
@@ -130,6 +167,10 @@ def ball_sightings(
         sighting = _box_sighting(box, float(detection.score), camera, state, config, downscale)
         if sighting is None:
             continue
+        if image is not None and config.min_shading_std is not None:
+            shading = middle_shading(image, box, config)
+            if shading is not None and shading < config.min_shading_std:
+                continue
         if config.body is not None:
             if body is None:
                 body = body_silhouettes(config.body, camera, state)
@@ -137,6 +178,30 @@ def ball_sightings(
                 continue
         found.append(sighting)
     return tuple(sorted(found, key=lambda s: -s.score))
+
+
+def middle_shading(
+    image: NDArray[np.uint8], box: FloatArray, config: CnnBallConfig
+) -> float | None:
+    """The std of the luminance (the mean of R, G and B, 0-255) over the middle half (in width
+    and height) of ``box`` (4,) ``(u0, v0, u1, v1)`` px in ``image`` (H, W, 3) uint8 RGB, the
+    middle clipped to the image; None where there is nothing to judge: a box narrower or
+    lower than ``config.min_judged_px``, a middle outside the image, or one whose median
+    luminance reaches ``config.clipped_luminance`` (over-exposed, as flat as a mark)."""
+    u0, v0, u1, v1 = (float(x) for x in box)
+    if u1 - u0 < config.min_judged_px or v1 - v0 < config.min_judged_px:
+        return None
+    height, width = image.shape[:2]
+    du, dv = (u1 - u0) / 4, (v1 - v0) / 4
+    cols = slice(max(round(u0 + du), 0), min(round(u1 - du), width))
+    rows = slice(max(round(v0 + dv), 0), min(round(v1 - dv), height))
+    middle = image[rows, cols]
+    if middle.size == 0:
+        return None
+    luminance = middle.mean(axis=2, dtype=np.float64)
+    if np.median(luminance) >= config.clipped_luminance:
+        return None
+    return float(luminance.std())
 
 
 def ball_in_view(

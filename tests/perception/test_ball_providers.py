@@ -81,14 +81,19 @@ def ball_detection(range_m: float, bearing: float, rows_up: float = 1.0) -> Dete
     return Detection(class_name="ball", class_id=1, box=box, score=0.9, keypoint=np.array([u, v]))
 
 
+# Uniform noise over 0-255: no box is flat in it (the sightings' flat-box check passes them)
+TEXTURED = np.random.default_rng(7).integers(0, 256, (CAMERA.height, CAMERA.width, 3), np.uint8)
+
+
 def cnn_frame(
     time_s: float, detections: tuple[Detection, ...], kick: FloatArray | None = NO_KICK
 ) -> SensorFrame:
-    """A frame of the given CNN detections; ``kick`` None: a robot that cannot kick (the
-    frame's default)."""
+    """A frame of the given CNN detections on the :data:`TEXTURED` image; ``kick`` None: a
+    robot that cannot kick (the frame's default)."""
     frame = SensorFrame(
         time_s=time_s,
         odometry_delta=np.zeros(3),
+        image=TEXTURED,
         camera=CAMERA,
         camera_state=STATE,
         emulated={IMAGE_DETECTIONS: detections, SELF_POSE: slam_estimate()},
@@ -121,7 +126,7 @@ def test_the_default_ball_pipeline_builds_the_cnn_sightings_and_the_filter() -> 
     assert isinstance(pipeline.provider(BALL), TrackedBall)
     assert pipeline.emulated == frozenset({IMAGE_DETECTIONS, SELF_POSE})
     assert pipeline.frame_inputs == frozenset(
-        {"camera", "camera_state", "odometry_delta", "kick_velocity"}
+        {"image", "camera", "camera_state", "odometry_delta", "kick_velocity"}
     )
     assert PipelineConfig().cnn_ball == CnnBallConfig(row_offset_px=1.0)
     assert PipelineConfig().ball_filter == BallFilterConfig()
@@ -209,12 +214,15 @@ def test_cnn_ball_sightings_provider_reads_the_frame_camera() -> None:
     provider = CnnBallSightings(CnnBallConfig(row_offset_px=1.0))
     inputs = {
         IMAGE_DETECTIONS: (ball_detection(3.0, 0.1),),
+        "image": TEXTURED,
         "camera": CAMERA,
         "camera_state": STATE,
     }
     (seen,) = provider.update(inputs, 0.0)
     assert seen.range_m == pytest.approx(3.0, abs=1e-6)
     assert seen.bearing_rad == pytest.approx(0.1, abs=1e-6)
+    flat = np.full_like(TEXTURED, 200)  # the same box on a flat frame: a painted mark
+    assert provider.update({**inputs, "image": flat}, 0.0) == ()
 
 
 # --- the oracles ----------------------------------------------------------------------------------

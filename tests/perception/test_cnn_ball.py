@@ -13,17 +13,25 @@ import math
 
 import numpy as np
 import pytest
+from numpy.typing import NDArray
 
 from perception.geometry import FloatArray, project_points, wrap_angle
 from perception.types import CameraModel, CameraState
 from perception.validation import InvalidTypeError
-from perception.vision.cnn_ball import BALL_CLASS, CnnBallConfig, ball_in_view, ball_sightings
+from perception.vision.cnn_ball import (
+    BALL_CLASS,
+    CnnBallConfig,
+    ball_in_view,
+    ball_sightings,
+    middle_shading,
+)
 from perception.vision.cnn_detector import OBJECT_CLASSES, Detection
 from perception.vision.ground_point import height_point
 
 CAMERA = CameraModel()
 RADIUS = 0.05
-CONFIG = CnnBallConfig()  # row_offset_px 0: the camera obeys the model
+# row_offset_px 0: the camera obeys the model; no images (the flat-box check has tests of its own)
+CONFIG = CnnBallConfig(min_shading_std=None)
 STATES = [
     CameraState(position=np.array([0.05, 0.0, 0.5]), head_yaw=0.0, head_pitch=0.3),
     CameraState(position=np.array([0.03, 0.04, 0.48]), head_yaw=0.6, head_pitch=0.25, tilt=0.05),
@@ -85,7 +93,7 @@ def test_the_box_centre_gives_the_range_and_bearing_of_the_ball(
     box = ball_box(range_m, bearing, state)
     if not in_image(box):
         pytest.skip("out of the image for this camera")
-    (found,) = ball_sightings([detection(box, score=0.7)], CAMERA, state, CONFIG)
+    (found,) = ball_sightings([detection(box, score=0.7)], CAMERA, state, CONFIG, image=None)
     assert abs(found.range_m - range_m) < 1e-6
     assert abs(wrap_angle(found.bearing_rad - bearing)) < 1e-6
     assert found.score == 0.7
@@ -109,11 +117,11 @@ def test_a_box_drawn_one_row_higher_reads_the_same_with_the_row_offset(state: Ca
     for range_m in (1.0, 2.5, 4.0):
         bearing = state.head_yaw + 0.1
         box = ball_box(range_m, bearing, state, rows_up=1.0)
-        (found,) = ball_sightings([detection(box)], CAMERA, state, shifted)
+        (found,) = ball_sightings([detection(box)], CAMERA, state, shifted, image=None)
         assert abs(found.range_m - range_m) < 1e-6
         assert abs(wrap_angle(found.bearing_rad - bearing)) < 1e-6
         # without the offset the same box, one row nearer the horizon, reads farther
-        (unshifted,) = ball_sightings([detection(box)], CAMERA, state, CONFIG)
+        (unshifted,) = ball_sightings([detection(box)], CAMERA, state, CONFIG, image=None)
         assert unshifted.range_m > range_m + 1e-3
 
 
@@ -123,7 +131,7 @@ def test_a_box_above_the_horizon_or_degenerate_gives_nothing() -> None:
     flat = np.array([150.0, 150.0, 150.0, 160.0])
     upside_down = np.array([160.0, 150.0, 150.0, 160.0])
     for box in (above, flat, upside_down):
-        assert ball_sightings([detection(box)], CAMERA, level, CONFIG) == ()
+        assert ball_sightings([detection(box)], CAMERA, level, CONFIG, image=None) == ()
 
 
 # --- what is dropped --------------------------------------------------------------------------
@@ -148,16 +156,16 @@ def test_boxes_touching_the_image_border_are_dropped() -> None:
     for (u_kept, v_kept), (u_cut, v_cut) in inside_and_cut:
         kept = np.array([u_kept, v_kept, u_kept + size, v_kept + size])
         cut = np.array([u_cut, v_cut, u_cut + size, v_cut + size])
-        assert len(ball_sightings([detection(kept)], CAMERA, steep, config)) == 1, kept
-        assert ball_sightings([detection(cut)], CAMERA, steep, config) == (), cut
+        assert len(ball_sightings([detection(kept)], CAMERA, steep, config, image=None)) == 1, kept
+        assert ball_sightings([detection(cut)], CAMERA, steep, config, image=None) == (), cut
     state = STATES[0]
     wide = dataclasses.replace(config, border_margin_px=30.0)
     box = ball_box(1.5, 0.0, state)
     assert box[0] > 30 and box[1] > 30 and box[2] < w - 31 and box[3] < h - 31
-    assert len(ball_sightings([detection(box)], CAMERA, state, wide)) == 1
+    assert len(ball_sightings([detection(box)], CAMERA, state, wide, image=None)) == 1
     box = ball_box(1.5, 0.42, state)  # towards the left edge, within 30 px of it
     assert 0.6 < box[0] < 29.5
-    assert ball_sightings([detection(box)], CAMERA, state, wide) == ()
+    assert ball_sightings([detection(box)], CAMERA, state, wide, image=None) == ()
 
 
 @pytest.mark.parametrize(
@@ -171,7 +179,7 @@ def test_a_box_of_the_wrong_width_for_its_range_is_dropped(scale: float, kept: b
     centre = (box[:2] + box[2:]) / 2
     half = scale * (box[2:] - box[:2]) / 2
     scaled = np.concatenate([centre - half, centre + half])
-    found = ball_sightings([detection(scaled)], CAMERA, state, CONFIG)
+    found = ball_sightings([detection(scaled)], CAMERA, state, CONFIG, image=None)
     assert len(found) == int(kept)
     if kept:
         assert abs(found[0].range_m - 2.0) < 1e-6  # the width does not move the range
@@ -190,13 +198,15 @@ def test_only_ball_detections_at_or_above_the_threshold_are_sighted_best_first()
         detection(boxes[4], score=0.95, name="robot"),  # another class
         detection(boxes[4], score=0.99, name="goal_post"),
     ]
-    found = ball_sightings(detections, CAMERA, state, CONFIG)
+    found = ball_sightings(detections, CAMERA, state, CONFIG, image=None)
     assert [s.score for s in found] == [0.9, 0.5, threshold]
     for s, (r, b) in zip(found, [places[1], places[0], places[2]], strict=True):
         assert abs(s.range_m - r) < 1e-6 and abs(s.bearing_rad - b) < 1e-6
-    assert ball_sightings([], CAMERA, state, CONFIG) == ()
+    assert ball_sightings([], CAMERA, state, CONFIG, image=None) == ()
     stricter = dataclasses.replace(CONFIG, score_threshold=0.8)
-    assert [s.score for s in ball_sightings(detections, CAMERA, state, stricter)] == [0.9]
+    assert [s.score for s in ball_sightings(detections, CAMERA, state, stricter, image=None)] == [
+        0.9
+    ]
 
 
 def test_non_finite_boxes_raise_unless_not_read() -> None:
@@ -204,16 +214,20 @@ def test_non_finite_boxes_raise_unless_not_read() -> None:
     for box in (np.array([1.0, 2.0, np.nan, 4.0]), np.array([np.inf, 2.0, 3.0, 4.0])):
         with pytest.raises(ValueError, match=r"detections\[1\].box"):
             ball_sightings(
-                [detection(ball_box(2.0, 0.0, state)), detection(box)], CAMERA, state, CONFIG
+                [detection(ball_box(2.0, 0.0, state)), detection(box)],
+                CAMERA,
+                state,
+                CONFIG,
+                image=None,
             )
     with pytest.raises(ValueError, match=r"detections\[0\].box"):
         short = Detection(
             class_name=BALL_CLASS, class_id=1, box=np.ones(3), score=0.8, keypoint=np.zeros(2)
         )
-        ball_sightings([short], CAMERA, state, CONFIG)
+        ball_sightings([short], CAMERA, state, CONFIG, image=None)
     bad = np.full(4, np.nan)
-    assert ball_sightings([detection(bad, name="robot")], CAMERA, state, CONFIG) == ()
-    assert ball_sightings([detection(bad, score=0.1)], CAMERA, state, CONFIG) == ()
+    assert ball_sightings([detection(bad, name="robot")], CAMERA, state, CONFIG, image=None) == ()
+    assert ball_sightings([detection(bad, score=0.1)], CAMERA, state, CONFIG, image=None) == ()
 
 
 # --- covariance ---------------------------------------------------------------------------------
@@ -223,7 +237,9 @@ def test_covariance_is_symmetric_positive_definite_and_grows_with_range() -> Non
     state = STATES[0]
     covs = []
     for range_m in (0.8, 1.2, 2.0, 3.0, 4.5):
-        (found,) = ball_sightings([detection(ball_box(range_m, 0.1, state))], CAMERA, state, CONFIG)
+        (found,) = ball_sightings(
+            [detection(ball_box(range_m, 0.1, state))], CAMERA, state, CONFIG, image=None
+        )
         np.testing.assert_array_equal(found.cov, found.cov.T)
         assert np.linalg.eigvalsh(found.cov).min() > 0
         covs.append(found.cov)
@@ -243,7 +259,7 @@ def test_range_and_bearing_variance_match_the_closed_form_on_the_centre_column(
     h, p = 0.5, 0.3
     state = CameraState(position=np.array([0.0, 0.0, h]), head_yaw=0.0, head_pitch=p)
     box = ball_box(range_m, 0.0, state)
-    (found,) = ball_sightings([detection(box)], CAMERA, state, CONFIG)
+    (found,) = ball_sightings([detection(box)], CAMERA, state, CONFIG, image=None)
     theta = math.atan((h - RADIUS) / range_m)
     v = CAMERA.cy + CAMERA.fy * math.tan(theta - p)
     assert (box[1] + box[3]) / 2 == pytest.approx(v)
@@ -272,10 +288,101 @@ def test_a_ball_box_on_our_own_shoulder_is_dropped() -> None:
     point = height_point(np.array([CAMERA.cx, CAMERA.height - 28.0]), RADIUS, CAMERA, state)
     assert point is not None
     box = ball_box(*point, state)
-    assert ball_sightings([detection(box)], CAMERA, state, CONFIG) == ()
+    assert ball_sightings([detection(box)], CAMERA, state, CONFIG, image=None) == ()
     unchecked = dataclasses.replace(CONFIG, body=None)
-    (kept,) = ball_sightings([detection(box)], CAMERA, state, unchecked)
+    (kept,) = ball_sightings([detection(box)], CAMERA, state, unchecked, image=None)
     assert kept.range_m == pytest.approx(point[0], abs=1e-9)
+
+
+# --- flat boxes (step 5) -------------------------------------------------------------------------
+
+GREEN = (40, 120, 40)
+
+
+def carpet() -> NDArray[np.uint8]:
+    """A carpet-green frame of the camera's size."""
+    return np.tile(np.array(GREEN, dtype=np.uint8), (CAMERA.height, CAMERA.width, 1))
+
+
+def paint_sphere(image: NDArray[np.uint8], box: FloatArray, light: FloatArray) -> None:
+    """A Lambertian sphere of albedo 0.9 inscribed in ``box`` (4,), lit along the unit
+    ``light`` (3,) (camera axes: x right, y down, z towards the viewer) with ambient 0.15."""
+    u0, v0, u1, v1 = box
+    cu, cv, r = (u0 + u1) / 2, (v0 + v1) / 2, (u1 - u0) / 2
+    v, u = np.mgrid[0 : image.shape[0], 0 : image.shape[1]] + 0.5
+    x, y = (u - cu) / r, (v - cv) / r
+    inside = x**2 + y**2 < 1.0
+    z = np.sqrt(np.clip(1.0 - x**2 - y**2, 0.0, 1.0))
+    grey = 255 * 0.9 * (0.15 + 0.85 * np.clip(x * light[0] + y * light[1] + z * light[2], 0, 1))
+    image[inside] = np.round(grey[inside])[:, None].astype(np.uint8)
+
+
+def test_middle_shading_is_the_std_of_the_middle_half_luminance() -> None:
+    """By hand: a box (100, 60)-(140, 100) has the middle (110, 70)-(130, 90); columns 110-119
+    black, 120-129 white give luminances 0 and 255 in equal numbers: std 127.5. A box under
+    ``min_judged_px`` across is not judged; a middle beyond the image is clipped to it; an
+    over-exposed one (median luminance at ``clipped_luminance`` or more) is not judged."""
+    config = CnnBallConfig()
+    image = carpet()
+    image[70:90, 110:120] = 0
+    image[70:90, 120:130] = 255
+    box = np.array([100.0, 60.0, 140.0, 100.0])
+    assert middle_shading(image, box, config) == pytest.approx(127.5)
+    assert middle_shading(image, np.array([100.0, 60.0, 107.0, 100.0]), config) is None
+    corner = np.array([CAMERA.width - 20.0, -20.0, CAMERA.width + 20.0, 20.0])
+    assert middle_shading(image, corner, config) == pytest.approx(0.0)  # the green corner
+    assert middle_shading(image, np.array([400.0, 300.0, 440.0, 340.0]), config) is None
+    image[70:90, 110:130] = 250
+    assert middle_shading(image, box, config) is None
+    assert middle_shading(image, box, dataclasses.replace(config, clipped_luminance=251.0)) == 0.0
+
+
+@pytest.mark.parametrize(
+    "light", [(0.0, 0.0, 1.0), (0.6, -0.6, 0.53), (-0.8, 0.0, 0.6), (0.0, -0.95, 0.31)]
+)
+def test_a_lit_sphere_is_kept_and_a_flat_disc_in_its_place_dropped(
+    light: tuple[float, float, float],
+) -> None:
+    """A ball box 1 m ahead: painted as a lit sphere (any light from the camera's side shades
+    its middle half by tens of grey levels) it is sighted; painted as a flat white disc with
+    the camera's noise (a penalty mark) it is dropped, unless the check is off."""
+    state = STATES[0]
+    box = ball_box(1.0, 0.05, state)
+    assert box[2] - box[0] > 16  # judged
+    config = CnnBallConfig()
+    rng = np.random.default_rng(3)
+    sphere = carpet()
+    paint_sphere(sphere, box, np.array(light) / np.linalg.norm(light))
+    (found,) = ball_sightings([detection(box)], CAMERA, state, config, image=sphere)
+    assert found.range_m == pytest.approx(1.0, abs=1e-6)
+    disc = carpet()
+    v, u = np.mgrid[0 : CAMERA.height, 0 : CAMERA.width] + 0.5
+    centre = ((box[0] + box[2]) / 2, (box[1] + box[3]) / 2)
+    disc[np.hypot(u - centre[0], v - centre[1]) < (box[2] - box[0]) / 2] = 245
+    noisy = np.clip(disc + rng.normal(0.0, 2.0, disc.shape), 0, 255).astype(np.uint8)
+    assert ball_sightings([detection(box)], CAMERA, state, config, image=noisy) == ()
+    unchecked = dataclasses.replace(config, min_shading_std=None)
+    assert len(ball_sightings([detection(box)], CAMERA, state, unchecked, image=noisy)) == 1
+
+
+def test_a_flat_box_too_small_to_judge_is_kept() -> None:
+    """A ball 4 m ahead boxes under ``min_judged_px``: flat or not, it is not judged."""
+    state = STATES[0]
+    box = ball_box(4.0, 0.0, state)
+    assert box[2] - box[0] < CnnBallConfig().min_judged_px
+    flat = carpet()
+    flat[int(box[1]) : int(box[3]) + 1, int(box[0]) : int(box[2]) + 1] = 245
+    assert len(ball_sightings([detection(box)], CAMERA, state, CnnBallConfig(), image=flat)) == 1
+
+
+def test_the_flat_box_check_needs_the_frame() -> None:
+    state = STATES[0]
+    box = ball_box(1.0, 0.0, state)
+    with pytest.raises(ValueError, match="image must be a"):
+        ball_sightings([detection(box)], CAMERA, state, CnnBallConfig(), image=None)
+    with pytest.raises(ValueError, match=r"got \(10, 10, 3\) uint8"):
+        small = np.zeros((10, 10, 3), dtype=np.uint8)
+        ball_sightings([detection(box)], CAMERA, state, CnnBallConfig(), image=small)
 
 
 @pytest.mark.parametrize(
@@ -299,6 +406,10 @@ def test_a_ball_box_on_our_own_shoulder_is_dropped() -> None:
         ("bottom_downscale", 0, ValueError),
         ("bottom_downscale", 2.0, InvalidTypeError),
         ("body", "arms", InvalidTypeError),
+        ("min_shading_std", 0.0, ValueError),
+        ("min_shading_std", math.nan, ValueError),
+        ("min_judged_px", -1.0, ValueError),
+        ("clipped_luminance", 256.0, ValueError),
     ],
 )
 def test_config_rejects_bad_values(field: str, value: object, error: type[Exception]) -> None:
