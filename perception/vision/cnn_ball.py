@@ -154,11 +154,15 @@ def ball_sightings(
     """
     if config.min_shading_std is not None:
         shape = (camera.height, camera.width, 3)
-        if image is None or image.shape != shape or image.dtype != np.uint8:
+        if not (isinstance(image, np.ndarray) and image.shape == shape and image.dtype == np.uint8):
+            got = (
+                f"{image.shape} {image.dtype}"
+                if isinstance(image, np.ndarray)
+                else type(image).__name__
+            )
             raise ValueError(
                 f"image must be a {shape} uint8 RGB array to judge flat boxes "
-                f"(CnnBallConfig.min_shading_std), got "
-                f"{'None' if image is None else f'{image.shape} {image.dtype}'}"
+                f"(CnnBallConfig.min_shading_std), got {got}"
             )
     found = []
     body: list[FloatArray] | None = None  # our body's silhouettes, made at the first ball box
@@ -186,24 +190,32 @@ def middle_shading(
     image: NDArray[np.uint8], box: FloatArray, config: CnnBallConfig
 ) -> float | None:
     """The std of the luminance (the mean of R, G and B, 0-255) over the middle half (in width
-    and height) of ``box`` (4,) ``(u0, v0, u1, v1)`` px in ``image`` (H, W, 3) uint8 RGB, the
-    middle clipped to the image; None where there is nothing to judge: a box narrower or
-    lower than ``config.min_judged_px``, a middle outside the image, or one whose median
-    luminance reaches ``config.clipped_luminance`` (over-exposed, as flat as a mark)."""
+    and height) of ``box`` (4,) ``(u0, v0, u1, v1)`` px in ``image`` (H, W, 3) uint8 RGB: the
+    pixels whose centres (pixel ``i`` at ``i``) lie within ``[u0 + w/4, u1 - w/4]`` and
+    ``[v0 + h/4, v1 - h/4]`` and inside the image; None where there is nothing to judge: a box
+    narrower or lower than ``config.min_judged_px``, a middle outside the image, or one whose
+    median luminance reaches ``config.clipped_luminance`` (over-exposed, as flat as a mark)."""
     u0, v0, u1, v1 = (float(x) for x in box)
     if u1 - u0 < config.min_judged_px or v1 - v0 < config.min_judged_px:
         return None
     height, width = image.shape[:2]
     du, dv = (u1 - u0) / 4, (v1 - v0) / 4
-    cols = slice(max(round(u0 + du), 0), min(round(u1 - du), width))
-    rows = slice(max(round(v0 + dv), 0), min(round(v1 - dv), height))
-    middle = image[rows, cols]
-    if middle.size == 0:
+    cols = _centres_within(u0 + du, u1 - du, width)
+    rows = _centres_within(v0 + dv, v1 - dv, height)
+    if cols is None or rows is None:
         return None
+    middle = image[rows, cols]
     luminance = middle.mean(axis=2, dtype=np.float64)
     if np.median(luminance) >= config.clipped_luminance:
         return None
     return float(luminance.std())
+
+
+def _centres_within(low: float, high: float, size: int) -> slice | None:
+    """The pixels (pixel ``i`` centred at ``i``) of ``0 .. size - 1`` whose centres lie in
+    ``[low, high]``; None if none do."""
+    first, last = max(math.ceil(low), 0), min(math.floor(high), size - 1)
+    return slice(first, last + 1) if first <= last else None
 
 
 def ball_in_view(
@@ -229,7 +241,7 @@ def _box_sighting(
     config: CnnBallConfig,
     downscale: int,
 ) -> BallSighting | None:
-    """Steps 1-3 and 5 of the module doc for one ball box (4,)."""
+    """Steps 1-3 and 6 of the module doc for one ball box (4,)."""
     if not (box[2] > box[0] and box[3] > box[1]) or _cut_off(box, camera, config):
         return None
     centre = _box_centre(box, config)

@@ -13,7 +13,7 @@ from scipy import stats
 
 from perception.geometry import FloatArray, project_points
 from perception.pipeline import PerceptionPipeline, PipelineConfig
-from perception.providers.ball import CnnBallSightings, TrackedBall
+from perception.providers.ball import CnnBallSightings, TrackedBall, TwoCameraCnnBallSightings
 from perception.providers.base import PerceptionContext
 from perception.providers.oracles import OracleBall, OracleBallSightings, OracleConfig
 from perception.representations import (
@@ -37,7 +37,7 @@ from perception.types import (
     SlamEstimate,
 )
 from perception.vision.cnn_ball import CnnBallConfig
-from perception.vision.cnn_detector import Detection
+from perception.vision.cnn_detector import CnnDetectorConfig, Detection
 
 CAMERA = CameraModel()
 HFOV_DEG = 60.0  # the oracles' camera: half field of view 30 deg
@@ -223,6 +223,34 @@ def test_cnn_ball_sightings_provider_reads_the_frame_camera() -> None:
     assert seen.bearing_rad == pytest.approx(0.1, abs=1e-6)
     flat = np.full_like(TEXTURED, 200)  # the same box on a flat frame: a painted mark
     assert provider.update({**inputs, "image": flat}, 0.0) == ()
+
+
+def test_two_camera_sightings_judge_each_camera_on_its_own_image() -> None:
+    """The same ball box in both cameras (the bottom camera's state set to the top one's, its
+    detector stubbed): a flat bottom image drops the bottom sighting only, a flat top image the
+    top one only."""
+    box = ball_detection(1.5, 0.1)
+
+    class Detector:
+        def detect_objects_downscaled(self, image: object, factor: int) -> list[Detection]:
+            return [box]
+
+    config = CnnBallConfig(row_offset_px=1.0, bottom_downscale=1)
+    provider = TwoCameraCnnBallSightings(config, CnnDetectorConfig(), context())
+    provider.detector = Detector()  # type: ignore[assignment]
+    flat = np.full_like(TEXTURED, 200)
+    inputs = {
+        IMAGE_DETECTIONS: (box,),
+        "image": TEXTURED,
+        "camera": CAMERA,
+        "camera_state": STATE,
+        "bottom_image": TEXTURED,
+        "bottom_camera_state": STATE,
+    }
+    assert len(provider.update(inputs, 0.0)) == 2
+    assert len(provider.update({**inputs, "bottom_image": flat}, 0.0)) == 1
+    assert len(provider.update({**inputs, "image": flat}, 0.0)) == 1
+    assert provider.update({**inputs, "image": flat, "bottom_image": flat}, 0.0) == ()
 
 
 # --- the oracles ----------------------------------------------------------------------------------

@@ -318,20 +318,26 @@ def paint_sphere(image: NDArray[np.uint8], box: FloatArray, light: FloatArray) -
 
 
 def test_middle_shading_is_the_std_of_the_middle_half_luminance() -> None:
-    """By hand: a box (100, 60)-(140, 100) has the middle (110, 70)-(130, 90); columns 110-119
-    black, 120-129 white give luminances 0 and 255 in equal numbers: std 127.5. A box under
-    ``min_judged_px`` across is not judged; a middle beyond the image is clipped to it; an
-    over-exposed one (median luminance at ``clipped_luminance`` or more) is not judged."""
+    """By hand: a box (99.5, 59.5)-(139.5, 99.5) has its middle half over the pixel centres
+    110-129 and 70-89 (pixel i centred at i); columns 110-119 black, 120-129 white give
+    luminances 0 and 255 in equal numbers: std 127.5 (a pixel more either way would add green).
+    A box under ``min_judged_px`` across is not judged; a middle beyond the image is clipped to
+    it, one wholly outside (any side) is not judged; an over-exposed one (median luminance at
+    ``clipped_luminance`` or more) is not judged."""
     config = CnnBallConfig()
     image = carpet()
     image[70:90, 110:120] = 0
     image[70:90, 120:130] = 255
-    box = np.array([100.0, 60.0, 140.0, 100.0])
+    box = np.array([99.5, 59.5, 139.5, 99.5])
     assert middle_shading(image, box, config) == pytest.approx(127.5)
+    assert middle_shading(image, box + np.array([-1.0, 0.0, 1.0, 0.0]), config) != 127.5
     assert middle_shading(image, np.array([100.0, 60.0, 107.0, 100.0]), config) is None
-    corner = np.array([CAMERA.width - 20.0, -20.0, CAMERA.width + 20.0, 20.0])
+    w, h = CAMERA.width, CAMERA.height
+    corner = np.array([w - 20.0, -20.0, w + 20.0, 20.0])
     assert middle_shading(image, corner, config) == pytest.approx(0.0)  # the green corner
-    assert middle_shading(image, np.array([400.0, 300.0, 440.0, 340.0]), config) is None
+    for outside in ([w + 10, 100, w + 50, 140], [-50, 100, -10, 140], [100, -50, 140, -10]):
+        assert middle_shading(image, np.array(outside, dtype=float), config) is None, outside
+    assert middle_shading(image, np.array([100, h + 10, 140, h + 50.0]), config) is None
     image[70:90, 110:130] = 250
     assert middle_shading(image, box, config) is None
     assert middle_shading(image, box, dataclasses.replace(config, clipped_luminance=251.0)) == 0.0
@@ -353,6 +359,8 @@ def test_a_lit_sphere_is_kept_and_a_flat_disc_in_its_place_dropped(
     rng = np.random.default_rng(3)
     sphere = carpet()
     paint_sphere(sphere, box, np.array(light) / np.linalg.norm(light))
+    shading = middle_shading(sphere, box, config)
+    assert shading is not None and shading >= 9.0  # judged: shaded (three times the check)
     (found,) = ball_sightings([detection(box)], CAMERA, state, config, image=sphere)
     assert found.range_m == pytest.approx(1.0, abs=1e-6)
     disc = carpet()
@@ -383,6 +391,8 @@ def test_the_flat_box_check_needs_the_frame() -> None:
     with pytest.raises(ValueError, match=r"got \(10, 10, 3\) uint8"):
         small = np.zeros((10, 10, 3), dtype=np.uint8)
         ball_sightings([detection(box)], CAMERA, state, CnnBallConfig(), image=small)
+    with pytest.raises(ValueError, match="got list"):
+        ball_sightings([detection(box)], CAMERA, state, CnnBallConfig(), image=[[0]])  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize(
@@ -410,6 +420,8 @@ def test_the_flat_box_check_needs_the_frame() -> None:
         ("min_shading_std", math.nan, ValueError),
         ("min_judged_px", -1.0, ValueError),
         ("clipped_luminance", 256.0, ValueError),
+        ("clipped_luminance", 0.0, ValueError),
+        ("min_judged_px", math.nan, ValueError),
     ],
 )
 def test_config_rejects_bad_values(field: str, value: object, error: type[Exception]) -> None:
