@@ -100,7 +100,10 @@ class CnnBallConfig:
     # a ball lit mostly by ambient light shades less (benchmarks/ball_detection.py, tuning
     # seeds 0-4: 1 % of the visible balls' boxes under 4.1 top, 4.6 bottom).
     min_shading_std: float | None = 3.0
-    min_judged_px: float = 8.0  # boxes narrower or lower than this (px) are not judged
+    # Boxes narrower or lower than this (px) are not judged: a smaller ball's middle shades too
+    # little to tell (judged from 8 px, the top camera's recall at 2-3 m fell 4.7 points on
+    # held-out randomised-lighting frames; the marks at the feet box 50-90 px)
+    min_judged_px: float = 16.0
     # A middle whose median luminance reaches this is over-exposed (flat because clipped at
     # 255, ball or mark): not judged
     clipped_luminance: float = 250.0
