@@ -213,13 +213,13 @@ def test_tracked_ball_loses_a_ball_its_camera_shows_but_does_not_see() -> None:
 def test_cnn_ball_sightings_provider_reads_the_frame_camera() -> None:
     provider = CnnBallSightings(CnnBallConfig(row_offset_px=1.0))
     inputs = {
-        IMAGE_DETECTIONS: (ball_detection(3.0, 0.1),),
+        IMAGE_DETECTIONS: (ball_detection(1.2, 0.1),),  # a box large enough to judge
         "image": TEXTURED,
         "camera": CAMERA,
         "camera_state": STATE,
     }
     (seen,) = provider.update(inputs, 0.0)
-    assert seen.range_m == pytest.approx(3.0, abs=1e-6)
+    assert seen.range_m == pytest.approx(1.2, abs=1e-6)
     assert seen.bearing_rad == pytest.approx(0.1, abs=1e-6)
     flat = np.full_like(TEXTURED, 200)  # the same box on a flat frame: a painted mark
     assert provider.update({**inputs, "image": flat}, 0.0) == ()
