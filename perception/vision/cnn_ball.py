@@ -94,11 +94,11 @@ class CnnBallConfig:
     # A box's middle half whose luminance (mean of R, G, B; 0-255) varies less than this (std)
     # is flat, not the ball; None: not checked. Fitted on the CNN's ball boxes in the rendered
     # striker without the check, tuning seeds 0-15 (benchmarks/ball_flatness.py): the bottom
-    # camera's 452 of the penalty mark at most 1.2 in 95 % (the camera's noise), 5.4 at most;
+    # camera's 452 of the penalty mark at most 1.2 in 95 % (the camera's noise), 4.9 at most;
     # its 277 of the ball at least 12.5 in 99 % (one of 1.1: a flat robot part beside the
-    # ball); the top camera's 1771 of the ball at least 8.8 in 99 %. Under randomised lighting
-    # a ball lit mostly by ambient light shades less (benchmarks/ball_detection.py, tuning
-    # seeds 0-4: 1 % of the visible balls' boxes under 4.1 top, 4.6 bottom).
+    # ball); the top camera's 1189 judged of the ball at least 7.2. Under randomised lighting a
+    # ball lit mostly by ambient light shades less (benchmarks/ball_detection.py, tuning seeds
+    # 0-4: 1 % of the visible balls' judged boxes under 5.8 top, 5.6 bottom).
     min_shading_std: float | None = 3.0
     # Boxes narrower or lower than this (px) are not judged: a smaller ball's middle shades too
     # little to tell (judged from 8 px, the top camera's recall at 2-3 m fell 4.7 points on

@@ -52,8 +52,7 @@ class GeometricBallConfig(RangeBands):
 # 0-1, 1-2, 2-3, 3-4, 4-5 and beyond 5 m; errors of the sightings of the ball (0-1.6 % of the
 # sightings were of something else up to 5 m, 18 % beyond: not emulated), 0.005 false
 # sightings per frame (not emulated). Fitted before the flat-box check (CnnBallConfig.
-# min_shading_std), which moves these recalls by at most 1.1 points, under the fit's precision,
-# and the false sightings to 0.003 per frame.
+# min_shading_std), which changes none of these numbers on the tuning frames.
 CNN_BALL = GeometricBallConfig(
     band_edges_m=(1.0, 2.0, 3.0, 4.0, 5.0),
     recall=(0.71, 0.80, 0.86, 0.82, 0.52, 0.19),
