@@ -289,3 +289,15 @@ def _label(owner: str, name: str) -> str:
 def _got(value: object) -> str:
     """A value for an error message, with its type: ``str '0.4'``."""
     return f"{type(value).__name__} {value!r}"
+
+
+def check_rgb_image(image: object, height: int, width: int, name: str = "image") -> None:
+    """Raise ValueError unless ``image`` is an (``height``, ``width``, 3) uint8 (RGB) array."""
+    shape = (height, width, 3)
+    if not (isinstance(image, np.ndarray) and image.dtype == np.uint8 and image.shape == shape):
+        got = (
+            f"{image.shape} {image.dtype}"
+            if isinstance(image, np.ndarray)
+            else type(image).__name__
+        )
+        raise ValueError(f"{name} must be a {shape} uint8 RGB array, got {got}")

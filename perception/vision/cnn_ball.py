@@ -51,6 +51,7 @@ from perception.validation import (
     check_int,
     check_positive,
     check_probability,
+    check_rgb_image,
     finite_vector,
 )
 from perception.vision.body_contour import BodyContourConfig, body_silhouettes, on_body
@@ -155,18 +156,8 @@ def ball_sightings(
     Raises ValueError if such a detection's box is not 4 finite numbers, or if ``image`` is
     needed and None or not of the camera's size.
     """
-    if config.min_shading_std is not None:
-        shape = (camera.height, camera.width, 3)
-        if not (isinstance(image, np.ndarray) and image.shape == shape and image.dtype == np.uint8):
-            got = (
-                f"{image.shape} {image.dtype}"
-                if isinstance(image, np.ndarray)
-                else type(image).__name__
-            )
-            raise ValueError(
-                f"image must be a {shape} uint8 RGB array to judge flat boxes "
-                f"(CnnBallConfig.min_shading_std), got {got}"
-            )
+    if config.min_shading_std is not None:  # the flat-box check looks at the frame
+        check_rgb_image(image, camera.height, camera.width)
     found = []
     body: list[FloatArray] | None = None  # our body's silhouettes, made at the first ball box
     for k, detection in enumerate(detections):

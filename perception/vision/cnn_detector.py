@@ -56,7 +56,7 @@ from perception.types import (
     PoleGeometry,
     pole_ids_by_colours,
 )
-from perception.validation import check_bool, check_int, check_probability
+from perception.validation import check_bool, check_int, check_probability, check_rgb_image
 from perception.vision.colour_filter import ColourFilterConfig
 from perception.vision.pole_colours import band_colours, colours_contradict, paint_hues
 from perception.vision.pole_edges import (
@@ -582,14 +582,7 @@ class CnnPoleDetector:
 
     def _check_image(self, image: NDArray[np.uint8]) -> None:
         """Raise ``ValueError`` unless ``image`` is an (H, W, 3) uint8 array of the camera."""
-        shape = (self.camera.height, self.camera.width, 3)
-        if not isinstance(image, np.ndarray) or image.shape != shape or image.dtype != np.uint8:
-            got = (
-                f"{image.dtype} array of shape {image.shape}"
-                if isinstance(image, np.ndarray)
-                else type(image).__name__
-            )
-            raise ValueError(f"image must be a uint8 array of shape {shape}, got {got}")
+        check_rgb_image(image, self.camera.height, self.camera.width)
 
 
 def network_from_weights(data: dict[str, Any]) -> PoleNet:

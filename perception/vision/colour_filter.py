@@ -60,7 +60,7 @@ from perception.types import (
     PoleGeometry,
     pole_ids_by_colours,
 )
-from perception.validation import check_in_interval, check_int, check_positive
+from perception.validation import check_in_interval, check_int, check_positive, check_rgb_image
 
 HsvRange = tuple[tuple[int, int, int], tuple[int, int, int]]
 """Inclusive ``((h, s, v) low, (h, s, v) high)`` bounds, OpenCV convention."""
@@ -282,12 +282,7 @@ class ColourPoleDetector:
 
     def _check_image(self, image: NDArray[np.uint8]) -> None:
         """Raise ``ValueError`` unless ``image`` is an (H, W, 3) uint8 array of the camera."""
-        shape = (self.camera.height, self.camera.width, 3)
-        if not (isinstance(image, np.ndarray) and image.dtype == np.uint8 and image.shape == shape):
-            raise ValueError(
-                f"image must be a {shape} uint8 RGB array, got "
-                f"{getattr(image, 'shape', type(image))} {getattr(image, 'dtype', '')}".rstrip()
-            )
+        check_rgb_image(image, self.camera.height, self.camera.width)
 
     def _clip(self, window: tuple[float, float, float, float]) -> tuple[int, int, int, int]:
         """``window`` ``(u0, v0, u1, v1)`` px rounded outwards and clipped to the image."""

@@ -70,7 +70,7 @@ from numpy.typing import NDArray
 from perception.field.features import FEATURE_KINDS, FieldFeature
 from perception.geometry import FloatArray
 from perception.types import CameraModel, CameraState
-from perception.validation import check_in_interval, check_int, check_positive
+from perception.validation import check_in_interval, check_int, check_positive, check_rgb_image
 from perception.vision.colour_filter import HsvRange, check_hsv_range
 from perception.vision.field_geometry import (
     Segment,
@@ -226,12 +226,7 @@ class _Frame:
         state: CameraState,
         config: FieldFeatureConfig,
     ) -> None:
-        shape = (camera.height, camera.width, 3)
-        if not (isinstance(image, np.ndarray) and image.dtype == np.uint8 and image.shape == shape):
-            raise ValueError(
-                f"image must be a {shape} uint8 RGB array, got "
-                f"{getattr(image, 'shape', type(image))} {getattr(image, 'dtype', '')}".rstrip()
-            )
+        check_rgb_image(image, camera.height, camera.width)
         self.camera = row_shifted(camera, config.row_offset_px)
         self.state, self.config = state, config
         self.projection = GroundProjection(self.camera, state)

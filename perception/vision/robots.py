@@ -88,7 +88,7 @@ from scipy.ndimage import grey_closing, median_filter
 
 from perception.geometry import FloatArray, pixel_rays, project_points, ray_ground_intersection
 from perception.types import CameraModel, CameraState, RobotSighting
-from perception.validation import check_in_interval, check_int, check_positive
+from perception.validation import check_in_interval, check_int, check_positive, check_rgb_image
 from perception.vision.colour_filter import HsvRange, check_hsv_range
 from perception.vision.field_pixels import (
     best_splits,
@@ -478,12 +478,7 @@ class RobotDetector:
 
     def _check_image(self, image: NDArray[np.uint8]) -> None:
         """Raise ``ValueError`` unless ``image`` is an (H, W, 3) uint8 array of the camera."""
-        shape = (self.camera.height, self.camera.width, 3)
-        if not (isinstance(image, np.ndarray) and image.dtype == np.uint8 and image.shape == shape):
-            raise ValueError(
-                f"image must be a {shape} uint8 RGB array, got "
-                f"{getattr(image, 'shape', type(image))} {getattr(image, 'dtype', '')}".rstrip()
-            )
+        check_rgb_image(image, self.camera.height, self.camera.width)
 
     def _horizon_rows(self, state: CameraState, columns: NDArray[np.intp]) -> FloatArray:
         """Row (C,) of the horizon at each column (the image height where it lies below).

@@ -21,6 +21,7 @@ from perception.validation import (
     check_int,
     check_positive,
     check_probability,
+    check_rgb_image,
     finite_points,
     finite_vector,
     is_finite_real,
@@ -277,3 +278,19 @@ def test_check_generator_takes_only_a_numpy_generator() -> None:
     for bad in (np.random.RandomState(0), 0, None):
         with pytest.raises(InvalidTypeError, match=r"rng must be a numpy\.random\.Generator"):
             check_generator("rng", bad)
+
+
+def test_check_rgb_image_accepts_the_frame_and_names_what_came() -> None:
+    check_rgb_image(np.zeros((4, 6, 3), dtype=np.uint8), 4, 6)
+    cases = [
+        (np.zeros((6, 4, 3), dtype=np.uint8), r"got \(6, 4, 3\) uint8"),
+        (np.zeros((4, 6, 3), dtype=np.float32), r"got \(4, 6, 3\) float32"),
+        (np.zeros((4, 6), dtype=np.uint8), r"got \(4, 6\) uint8"),
+        ([[0]], "got list"),
+        (None, "got NoneType"),
+    ]
+    for image, got in cases:
+        with pytest.raises(
+            ValueError, match=r"frame must be a \(4, 6, 3\) uint8 RGB array, " + got
+        ):
+            check_rgb_image(image, 4, 6, "frame")
