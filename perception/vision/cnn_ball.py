@@ -102,8 +102,9 @@ class CnnBallConfig:
     # 0-4: 1 % of the visible balls' judged boxes under 5.8 top, 5.6 bottom).
     min_shading_std: float | None = 3.0
     # Boxes narrower or lower than this (px) are not judged: a smaller ball's middle shades too
-    # little to tell (judged from 8 px, the top camera's recall at 2-3 m fell 4.7 points on
-    # held-out randomised-lighting frames; the marks at the feet box 50-90 px)
+    # little to tell (judged from 8 px, the top camera's recall at 2-3 m fell 2.3 points on the
+    # tuning frames of benchmarks/ball_detection.py, 4.7 on its held-out ones, which this
+    # choice therefore saw; the marks at the feet box 50-90 px)
     min_judged_px: float = 16.0
     # A middle whose median luminance reaches this is over-exposed (flat because clipped at
     # 255, ball or mark): not judged
