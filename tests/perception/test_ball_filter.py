@@ -261,6 +261,8 @@ def test_the_robot_motion_moves_the_frame_and_its_noise_is_first_order(
 # --- BallFilter: start and one Kalman step ------------------------------------------------------
 
 EXACT_STEP = BallFilterConfig(odometry_turn_std_floor_rad=0.0)  # no odometry noise standing still
+# ... and the first sighting starts the filter (unconfirmed)
+EXACT_FIRST = dataclasses.replace(EXACT_STEP, start_confirm_s=None)
 
 
 def test_the_ball_is_unknown_before_the_first_sighting() -> None:
@@ -280,8 +282,8 @@ def test_the_ball_is_unknown_before_the_first_sighting() -> None:
     "pose_cov",
     [EXACT, np.array([[0.01, 0.002, 0.003], [0.002, 0.02, -0.004], [0.003, -0.004, 0.01]])],
 )
-def test_the_first_sighting_starts_the_filter_at_rest_at_the_sighting(pose_cov: FloatArray) -> None:
-    config = BallFilterConfig(initial_velocity_std_mps=0.7)
+def test_unconfirmed_the_first_sighting_starts_the_filter_there(pose_cov: FloatArray) -> None:
+    config = BallFilterConfig(initial_velocity_std_mps=0.7, start_confirm_s=None)
     pose = np.array([1.0, -0.5, 0.4])
     r, b = 2.0, 0.3
     cov = np.array([[0.05**2, 0.0003], [0.0003, 0.02**2]])
@@ -308,7 +310,10 @@ def test_the_first_sighting_starts_the_filter_at_rest_at_the_sighting(pose_cov: 
 
 def test_the_second_sighting_of_a_resting_ball_is_a_kalman_step() -> None:
     config = BallFilterConfig(
-        acceleration_psd=0.2, initial_velocity_std_mps=0.4, odometry_turn_std_floor_rad=0.0
+        acceleration_psd=0.2,
+        initial_velocity_std_mps=0.4,
+        odometry_turn_std_floor_rad=0.0,
+        start_confirm_s=None,
     )
     pose = np.array([-1.0, 0.5, -0.8])
     ball_filter = BallFilter(config)
@@ -348,11 +353,116 @@ def test_the_second_sighting_of_a_resting_ball_is_a_kalman_step() -> None:
     assert_psd(estimate.cov)
 
 
+# --- BallFilter: a belief starts from two sightings that agree --------------------------------
+
+
+def point_of(r: float, b: float) -> FloatArray:
+    """The robot-frame point (2,) at range ``r`` and bearing ``b``."""
+    return np.array([r * math.cos(b), r * math.sin(b)])
+
+
+def test_one_sighting_starts_nothing_and_two_that_agree_start_at_their_weighted_mean() -> None:
+    """The belief the second sighting starts: the two points' information-weighted mean with
+    covariance ``(R0^-1 + R1^-1)^-1``, at rest with the initial velocity variance (no
+    correlation: the Kalman step leaves the velocity block alone). No odometry noise: the
+    waiting point is moved by an exact standstill."""
+    config = BallFilterConfig(initial_velocity_std_mps=0.6, odometry_turn_std_floor_rad=0.0)
+    pose = np.array([0.5, 1.0, -0.3])
+    (r0, b0, cov0), (r1, b1, cov1) = (2.0, 0.2, COV), (2.05, 0.21, np.diag([0.06**2, 0.01**2]))
+    ball_filter = BallFilter(config)
+    first = ball_filter.update(1.0, [sighting(r0, b0, cov0)], STILL, self_pose(pose))
+    assert not first.known and first.last_seen_s == -math.inf
+    np.testing.assert_array_equal(first.relative, np.zeros(4))
+    estimate = ball_filter.update(1.1, [sighting(r1, b1, cov1)], STILL, self_pose(pose))
+    assert estimate.known and estimate.last_seen_s == 1.1
+    J0, J1 = polar_jacobian(0.0, r0, b0), polar_jacobian(0.0, r1, b1)
+    info0, info1 = np.linalg.inv(J0 @ cov0 @ J0.T), np.linalg.inv(J1 @ cov1 @ J1.T)
+    P = np.linalg.inv(info0 + info1)
+    mean = P @ (info0 @ point_of(r0, b0) + info1 @ point_of(r1, b1))
+    np.testing.assert_allclose(estimate.relative, [*mean, 0.0, 0.0], rtol=1e-10, atol=1e-13)
+    np.testing.assert_allclose(estimate.relative_cov[:2, :2], P, rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(estimate.relative_cov[:2, 2:], np.zeros((2, 2)), atol=1e-15)
+    np.testing.assert_allclose(estimate.relative_cov[2:, 2:], 0.36 * np.eye(2), rtol=1e-12)
+    assert_psd(estimate.relative_cov)
+
+
+def test_the_first_sighting_waits_moved_with_the_robot_and_only_start_confirm_s_long() -> None:
+    """A robot walking 0.1 m a frame towards a resting ball at (2, 0): the waiting sighting,
+    moved with the odometry, agrees with one two frames later (the ball at 1.8 m); one more
+    than ``start_confirm_s`` later starts nothing and waits itself."""
+    ball = np.array([2.0, 0.0])
+    step = np.array([0.1, 0.0, 0.0])
+
+    def pose_at(k: int) -> FloatArray:
+        return np.array([0.1 * k, 0.0, 0.0])
+
+    for gap, starts in ((2, True), (4, False)):
+        ball_filter = BallFilter(BallFilterConfig(start_confirm_s=0.25))
+        ball_filter.update(0.0, [observe(pose_at(0), ball)], STILL, self_pose(pose_at(0)))
+        for k in range(1, gap):
+            estimate = ball_filter.update(k * DT, [], step, self_pose(pose_at(k)))
+            assert not estimate.known
+        seen = observe(pose_at(gap), ball)
+        estimate = ball_filter.update(gap * DT, [seen], step, self_pose(pose_at(gap)))
+        assert estimate.known == starts, gap
+        if starts:
+            np.testing.assert_allclose(estimate.relative[:2], ball - pose_at(gap)[:2], atol=1e-12)
+            np.testing.assert_allclose(estimate.state[:2], ball, atol=1e-12)
+        else:  # the late one waits in turn: the next frame's agreeing sighting starts it
+            k = gap + 1
+            estimate = ball_filter.update(
+                k * DT, [observe(pose_at(k), ball)], step, self_pose(pose_at(k))
+            )
+            assert estimate.known and estimate.last_seen_s == pytest.approx(k * DT)
+
+
+def test_a_sighting_that_disagrees_waits_in_place_of_the_first() -> None:
+    """A false first sighting (at (0.5, 2)) and the ball (at (2, 0)): the ball's sighting does
+    not agree, so it waits instead; of the next frame's two sightings, the false one first,
+    the one that agrees with it (the ball) starts the belief there."""
+    pose = [0.0, 0.0, 0.0]
+    ball, false = [2.0, 0.0], [0.5, 2.0]
+    ball_filter = BallFilter()
+    ball_filter.update(0.0, [observe(pose, false)], STILL, self_pose(pose))
+    estimate = ball_filter.update(DT, [observe(pose, ball)], STILL, self_pose(pose))
+    assert not estimate.known
+    sightings = [observe(pose, false), observe(pose, ball)]
+    estimate = ball_filter.update(2 * DT, sightings, STILL, self_pose(pose))
+    assert estimate.known and estimate.last_seen_s == 2 * DT
+    np.testing.assert_allclose(estimate.state[:2], ball, atol=1e-12)
+
+
+def test_every_sighting_of_a_frame_waits_and_the_best_scored_that_agrees_starts() -> None:
+    """A frame with a false sighting (scored first) and the ball: both wait; the next frame's
+    ball (alone, or scored first beside the false one seen again) starts the belief there."""
+    pose = [0.0, 0.0, 0.0]
+    ball, false = [2.0, 0.0], [0.5, 2.0]
+    for later in ([ball], [ball, false]):
+        ball_filter = BallFilter()
+        both = [observe(pose, false), observe(pose, ball)]
+        assert not ball_filter.update(0.0, both, STILL, self_pose(pose)).known
+        sightings = [observe(pose, point) for point in later]
+        estimate = ball_filter.update(DT, sightings, STILL, self_pose(pose))
+        assert estimate.known, later
+        np.testing.assert_allclose(estimate.state[:2], ball, atol=1e-12)
+
+
+def test_reset_forgets_the_waiting_sighting() -> None:
+    pose = [0.0, 0.0, 0.0]
+    ball_filter = BallFilter()
+    ball_filter.update(0.0, [observe(pose, [2.0, 0.0])], STILL, self_pose(pose))
+    ball_filter.reset()
+    estimate = ball_filter.update(DT, [observe(pose, [2.0, 0.0])], STILL, self_pose(pose))
+    assert not estimate.known
+
+
 def test_a_frame_without_sightings_only_predicts() -> None:
     """Standing still, the odometry's turn floor (std 0.002 rad) still turns the frame: a
     resting ball at p gains ``0.002² b bᵀ`` with ``b = (p_y, -p_x)``, the derivative of
     ``R(-dθ) p`` at dθ = 0."""
-    config = BallFilterConfig(acceleration_psd=0.1, odometry_turn_std_floor_rad=0.002)
+    config = BallFilterConfig(
+        acceleration_psd=0.1, odometry_turn_std_floor_rad=0.002, start_confirm_s=None
+    )
     ball_filter = BallFilter(config)
     ball_filter.update(0.0, [sighting(2.0, 0.5)], STILL, self_pose([0, 0, 0]))
     P0 = ball_filter.estimate(self_pose([0, 0, 0])).relative_cov
@@ -386,7 +496,7 @@ def test_of_several_sightings_the_one_nearest_the_prediction_is_fused() -> None:
 
 
 def test_our_own_kick_sets_the_velocity_of_a_ball_within_reach() -> None:
-    config = EXACT_STEP
+    config = EXACT_FIRST
     kick = np.array([2.0, 0.5])
     ball_filter = BallFilter(config)
     ball_filter.update(0.0, [sighting(0.3, 0.2)], STILL, self_pose([0, 0, 0]))
@@ -472,7 +582,9 @@ def test_a_ball_unseen_is_lost_once_its_position_std_passes_lost_std_m(lost_std_
     frame whose predicted position std passes ``lost_std_m`` (worked out with the
     constant-velocity covariance step), forgotten from that frame on (last_seen_s kept); the
     next sighting, anywhere, starts the filter afresh there."""
-    config = BallFilterConfig(odometry_turn_std_floor_rad=0.0, lost_std_m=lost_std_m)
+    config = BallFilterConfig(
+        odometry_turn_std_floor_rad=0.0, lost_std_m=lost_std_m, start_confirm_s=None
+    )
     pose, ball = [0.0, 0.0, 0.0], [2.0, 0.5]
     ball_filter = BallFilter(config)
     for k in range(5):
@@ -679,15 +791,17 @@ def kicked_runs(
 
 
 def test_a_kick_is_followed_without_a_restart() -> None:
-    """The filter is never restarted (a restart puts it at rest: zero velocity with the
-    initial velocity variance), the position stays within 0.2 m, the covariance PSD, and over
-    the runs the velocity converges to the rolling ball's (median error < 0.15 m/s after 2.5 s)."""
+    """The filter, started by the second frame's sighting (which confirms the first), is never
+    restarted (a restart puts it at rest: zero velocity with the initial velocity variance),
+    the position stays within 0.2 m, the covariance PSD, and over the runs the velocity
+    converges to the rolling ball's (median error < 0.15 m/s after 2.5 s)."""
     restarted = BallFilterConfig().initial_velocity_std_mps ** 2 * np.eye(2)
     final_velocity_errors = []
     for seed, (estimates, truths) in enumerate(kicked_runs()):
         for k, (estimate, truth) in enumerate(zip(estimates, truths, strict=True)):
             assert_psd(estimate.cov)
-            if k > 0:
+            assert estimate.known == (k > 0), (seed, k)
+            if k > 1:
                 assert not (
                     np.all(estimate.state[2:] == 0.0)
                     and np.array_equal(estimate.cov[2:, 2:], restarted)
@@ -902,12 +1016,13 @@ def test_reset_forgets_the_ball_the_time_and_the_candidate() -> None:
     estimate = ball_filter.estimate(self_pose(pose))
     assert not estimate.known and estimate.last_seen_s == -math.inf
     np.testing.assert_array_equal(estimate.state, np.zeros(4))
-    # an earlier time is fine after a reset; the first sighting starts the filter anew
-    estimate = ball_filter.update(0.0, [observe(pose, [2.0, 0.0])], STILL, self_pose(pose))
-    assert estimate.known and estimate.last_seen_s == 0.0
+    # an earlier time is fine after a reset; two sightings start the filter anew
+    ball_filter.update(0.0, [observe(pose, [2.0, 0.0])], STILL, self_pose(pose))
+    estimate = ball_filter.update(DT, [observe(pose, [2.0, 0.0])], STILL, self_pose(pose))
+    assert estimate.known and estimate.last_seen_s == DT
     # the old candidate is gone: one far sighting there is not a restart
-    estimate = ball_filter.update(DT, [observe(pose, [0.5, 2.0])], STILL, self_pose(pose))
-    assert estimate.last_seen_s == 0.0
+    estimate = ball_filter.update(2 * DT, [observe(pose, [0.5, 2.0])], STILL, self_pose(pose))
+    assert estimate.last_seen_s == DT
     np.testing.assert_allclose(estimate.state[:2], [2.0, 0.0], atol=1e-12)
 
 
@@ -938,6 +1053,9 @@ def test_reset_forgets_the_ball_the_time_and_the_candidate() -> None:
         ("own_kick_rolling_fraction", 0.0),
         ("own_kick_rolling_fraction", 1.1),
         ("own_kick_std_mps", 0.0),
+        ("start_confirm_s", 0.0),
+        ("start_confirm_s", -0.1),
+        ("start_confirm_s", math.nan),
     ],
 )
 def test_config_rejects_bad_values(field: str, value: float) -> None:

@@ -247,25 +247,29 @@ def test_covariance_is_symmetric_positive_definite_and_grows_with_range() -> Non
 
 
 @pytest.mark.parametrize("range_m", [0.8, 1.5, 3.0, 5.0])
+@pytest.mark.parametrize("tilt_std", [0.0, 0.0075, 0.02])
 def test_range_and_bearing_variance_match_the_closed_form_on_the_centre_column(
-    range_m: float,
+    range_m: float, tilt_std: float
 ) -> None:
     """Camera at the origin, height h, pitched down by p, looking along x; the ball's centre on
     the centre column at horizontal distance d lies (h - r) below the camera, at the angle
     theta = atan((h - r) / d) below the horizon and row v = cy + fy tan(theta - p). Then
     dd/dv = -(h - r) / sin(theta)^2 * fy / (fy^2 + (v - cy)^2), the bearing moves by
     cos(theta - p) / (fx cos(theta)) per column and neither depends on the other pixel axis;
-    the pixel std is hypot(1.15, 0.0475 * box width)."""
+    the pixel std is hypot(1.15, 0.0475 * box width) on u, and on v also fy times the
+    camera's unsensed tilt std, which thus widens the range alone."""
     h, p = 0.5, 0.3
     state = CameraState(position=np.array([0.0, 0.0, h]), head_yaw=0.0, head_pitch=p)
     box = ball_box(range_m, 0.0, state)
-    (found,) = ball_sightings([detection(box)], CAMERA, state, CONFIG, image=None)
+    config = dataclasses.replace(CONFIG, camera_tilt_std_rad=tilt_std)
+    (found,) = ball_sightings([detection(box)], CAMERA, state, config, image=None)
     theta = math.atan((h - RADIUS) / range_m)
     v = CAMERA.cy + CAMERA.fy * math.tan(theta - p)
     assert (box[1] + box[3]) / 2 == pytest.approx(v)
     slope = (h - RADIUS) / math.sin(theta) ** 2 * CAMERA.fy / (CAMERA.fy**2 + (v - CAMERA.cy) ** 2)
     std = math.hypot(1.15, 0.0475 * (box[2] - box[0]))
-    assert found.cov[0, 0] == pytest.approx((slope * std) ** 2, rel=2e-3)
+    row_std = math.hypot(std, CAMERA.fy * tilt_std)
+    assert found.cov[0, 0] == pytest.approx((slope * row_std) ** 2, rel=2e-3)
     bearing_slope = math.cos(theta - p) / (CAMERA.fx * math.cos(theta))
     assert found.cov[1, 1] == pytest.approx((bearing_slope * std) ** 2, rel=2e-3)
     assert abs(found.cov[0, 1]) < 1e-9 * math.sqrt(found.cov[0, 0] * found.cov[1, 1])
@@ -409,6 +413,8 @@ def test_the_flat_box_check_needs_the_frame() -> None:
         ("pixel_std_px", 0.0, ValueError),
         ("pixel_std_per_size", -0.1, ValueError),
         ("pixel_std_per_size", math.inf, ValueError),
+        ("camera_tilt_std_rad", -0.01, ValueError),
+        ("camera_tilt_std_rad", math.nan, ValueError),
         ("size_tolerance", 0.0, ValueError),
         ("row_offset_px", 5.0, ValueError),
         ("row_offset_px", -6.0, ValueError),
