@@ -45,7 +45,7 @@ edge that the CNN scores just over its threshold, then starts nothing (with
 A belief left without sightings grows uncertain (the ball rolls on in it, or a ball stopped by a
 robot rolls on only in the belief): once its position std (the root of the trace of the
 position covariance) exceeds ``lost_std_m``, the ball is lost. The filter forgets it (``known``
-False, as before the first sighting; ``last_seen_s`` kept) and the next sighting starts it
+False, as before the first sighting; ``last_seen_s`` kept) and the next sightings start it
 afresh, so that nobody walks after a belief that has nothing left to do with the ball. So it is
 when the belief lay where the camera would have seen it (``in_view``) in frames since its last
 fused sighting that would all have missed a ball there with a chance under ``lost_chance``
@@ -126,10 +126,11 @@ class BallFilterConfig:
     )
     lost_chance: float = 0.01
     # A first sighting waits this long (s) for a second that agrees with it before a belief
-    # starts (module doc); None: the first sighting starts it. The rendered striker's single
-    # false sightings (a goal post's foot at the image's top edge, scored 0.40-0.58) came
-    # alone; the ball, seen from frame to frame, is found one frame later (tuning seeds 0-15,
-    # benchmarks/ball_sighting_noise.py)
+    # starts (module doc); None: the first sighting starts it. In the rendered striker (tuning
+    # seeds 0-15) the false sightings that started beliefs metres off (a goal post's foot at
+    # the image's top edge, the boards' bottom edge, scored 0.40-0.58) came alone, and made
+    # 60 % of the relative ball error (benchmarks/ball_belief_errors.py, "far_off"); the ball,
+    # seen from frame to frame, is believed a frame later
     start_confirm_s: float | None = 0.3
     # in view (the provider's in_view): this share of the image's size inside its edges
     view_margin: float = 0.1
