@@ -13,8 +13,10 @@ is put in one class:
 - ``ball_moving``: the ball rolls;
 - ``rest``: the rest.
 
-Reports per class the steps, the error's sum and its share of the whole, and the mean; and
-the whole's mean, median and 95th percentile, with the field-frame error beside it.
+Reports per class the steps, the error's sum and its share of the whole, and the mean; the
+whole's mean, median and 95th percentile, with the field-frame error beside it; and how many
+steps with the true ball within ``NEAR_M`` had no ball believed (``unbelieved``: a later
+start lowers the error above and shows here).
 
     python benchmarks/ball_belief_errors.py                  # tuning seeds 0-15, ~6 min
     python benchmarks/ball_belief_errors.py --set perception.ball_filter.start_confirm_s=null \
@@ -83,6 +85,7 @@ def main() -> None:
     policy = load_policy(args.player, env.get_wrapper_attr("config"))
     errors: dict[str, list[float]] = defaultdict(list)
     relative, field = [], []
+    unbelieved = 0
     for seed in range(args.seed, args.seed + args.episodes):
         obs, info = env.reset(seed=seed)
         done, first = False, True
@@ -93,7 +96,10 @@ def main() -> None:
             done = terminated or truncated
             truth, belief = info["ground_truth"], info["perception"]
             ball = relative_ball(truth)
-            if not belief["ball_known"] or np.hypot(*ball) >= NEAR_M:
+            if np.hypot(*ball) >= NEAR_M:
+                continue
+            if not belief["ball_known"]:
+                unbelieved += 1
                 continue
             error = float(np.hypot(*(ball - belief["ball_relative"])))
             kind = error_class(
@@ -118,6 +124,8 @@ def main() -> None:
             "p95": float(np.percentile(relative, 95)),
         },
         "field_error_mean_m": float(np.mean(field)),
+        "unbelieved_steps": unbelieved,
+        "unbelieved_share": unbelieved / max(unbelieved + len(relative), 1),
         "classes": {
             kind: {
                 "steps": len(errors[kind]),
@@ -131,7 +139,8 @@ def main() -> None:
     }
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / f"{args.name}.json").write_text(json.dumps(result, indent=1))
-    print(json.dumps({k: result[k] for k in ("relative_error_m", "field_error_mean_m")}))
+    keys = ("relative_error_m", "field_error_mean_m", "unbelieved_share")
+    print(json.dumps({k: result[k] for k in keys}))
     for kind, c in result["classes"].items():
         share = f"{c['share']:.0%}"
         print(f"{kind:15s} steps {c['steps']:5d} error sum {c['error_sum_m']:7.1f} m ({share})")

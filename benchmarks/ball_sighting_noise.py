@@ -4,16 +4,17 @@ What: ``--episodes`` episodes of ``--env`` (``SPL/Striker-v0``, rendered: pixels
 from ``reset(seed=--seed + k)``, played by the centre-kicking striker. After every step each
 camera's frame (the top one, and the bottom one read at the pipeline's ``bottom_downscale``)
 goes through the CNN again and :func:`perception.vision.cnn_ball.ball_sightings` as the env
-runs it; a sighting within ``OF_BALL_M`` plus ``OF_BALL_FRACTION`` of its range of the true
-ball (robot frame) is of the ball, and its range and bearing errors are kept with two parts
+runs it; a sighting within ``OF_BALL_M`` plus ``OF_BALL_FRACTION`` of the true range of the
+true ball (robot frame) is of the ball, and its range and bearing errors are kept with two parts
 of its variance worked out here: the pixel noise's (``CnnBallConfig.pixel_std``) and that of
 one radian of camera pitch (``fy`` pixels on ``v``), both through
 :func:`perception.vision.ground_point.range_bearing_cov`. The tilt std is the maximum-likelihood
-fit to the range errors of the top camera's sightings nearer than ``--max-range`` while our
-robot walks (the sway grows with the walking speed; the bottom camera's sightings at the feet
-move by millimetres). Reports the fit, and per camera, walking or standing, and range band:
-the count, the range error's mean and std, the model's std without and with the tilt, and the
-mean normalised squared range and bearing errors (NEES, 1 when the model is right).
+fit to the range errors of the top camera's sightings from 0.6 m (where the bottom camera
+takes over) to ``--max-range`` while our robot walks (the sway grows with the walking speed;
+the bottom camera's sightings at the feet move by millimetres). Reports the fit, and per
+camera, walking or standing, and range band: the count, the range error's mean and std, the
+model's std without and with the tilt, and the mean normalised squared range and bearing
+errors (NEES, 1 when the model is right).
 
     python benchmarks/ball_sighting_noise.py              # tuning seeds 0-15, ~8 min
 
@@ -197,9 +198,10 @@ def main() -> None:
     groups: dict[str, list[dict[str, Any]]] = defaultdict(list)
     for r in rows:
         band = int(np.searchsorted(BANDS_M, r["range_m"], side="right")) - 1
-        lo, hi = BANDS_M[band], BANDS_M[min(band + 1, len(BANDS_M) - 1)]
+        lo = BANDS_M[band]
+        span = f"{lo:g}-{BANDS_M[band + 1]:g} m" if band + 1 < len(BANDS_M) else f"{lo:g}+ m"
         motion = "walking" if r["walking"] else "standing"
-        groups[f"{r['camera']}/{motion}/{lo:g}-{hi:g} m"].append(r)
+        groups[f"{r['camera']}/{motion}/{span}"].append(r)
     result = {
         "env_id": args.env,
         "seeds": [args.seed, args.seed + args.episodes - 1],

@@ -34,13 +34,16 @@ instead. A sighting still outside is kept as a candidate; when the next frame's 
 with it (within the gate of their joint covariance, after the robot's motion) and still not
 with the filter, the filter restarts there (the ball was moved, or the filter had followed a
 false sighting). A belief starts at rest, with velocity std ``initial_velocity_std_mps``, from
-two sightings that agree: a frame's sightings wait (moved with the robot's motion) up to
-``start_confirm_s`` for a later one within the gate of their joint covariance; the best-scored
-later sighting that agrees with one of them is fused into the waiting one nearest it (by the
-gate's distance), which starts the belief; when none agrees, the later frame's sightings wait
-in their place. A single false sighting, such as the foot of a goal post at the image's top
-edge that the CNN scores just over its threshold, then starts nothing (with
-``start_confirm_s`` None the first sighting starts the filter).
+two sightings that agree. Each of a frame's sightings becomes a waiting belief, at rest with
+that velocity std, predicted from frame to frame like the belief itself (rolling, the robot's
+motion) for up to ``start_confirm_s``; the best-scored later sighting within the gate of a
+waiting belief (the nearest, by the gate's distance) is fused into it, which starts the belief,
+so that the start equals the first sighting's belief after its second; when none agrees, the
+later frame's sightings wait in their place. A single false sighting, such as the foot of a
+goal post at the image's top edge that the CNN scores just over its threshold, then starts
+nothing (with ``start_confirm_s`` None the first sighting starts the filter). The two
+sightings are taken as independent, though the walk's sway that tilts the camera (a part of
+their noise) changes little from one frame to the next.
 
 A belief left without sightings grows uncertain (the ball rolls on in it, or a ball stopped by a
 robot rolls on only in the belief): once its position std (the root of the trace of the
@@ -95,6 +98,7 @@ from perception.validation import (
 _OWNER = "BallFilterConfig"
 _H = np.hstack([np.eye(2), np.zeros((2, 2))])  # the sightings measure the position
 _ORIGIN, _NO_POSE_COV = np.zeros(3), np.zeros((3, 3))  # a sighting in the robot's own frame
+_TIME_ROUNDING_S = 1e-9  # frame times summed step by step: 3 x 0.1 s may come out over 0.3 s
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -130,7 +134,8 @@ class BallFilterConfig:
     # seeds 0-15) the false sightings that started beliefs metres off (a goal post's foot at
     # the image's top edge, the boards' bottom edge, scored 0.40-0.58) came alone, and made
     # 60 % of the relative ball error (benchmarks/ball_belief_errors.py, "far_off"); the ball,
-    # seen from frame to frame, is believed a frame later
+    # seen from frame to frame, is believed a frame later. Shorter than the time between two
+    # frames, no belief ever starts.
     start_confirm_s: float | None = 0.3
     # in view (the provider's in_view): this share of the image's size inside its edges
     view_margin: float = 0.1
@@ -308,8 +313,9 @@ class BallFilter:
         self._last_seen_s = -math.inf
         self._time_s: float | None = None
         self._candidate: tuple[FloatArray, FloatArray] | None = None
-        self._waiting: list[tuple[FloatArray, FloatArray]] = []  # sightings awaiting a second
-        self._waiting_s = -math.inf  # ... since this time (s)
+        # beliefs (state, covariance) of sightings awaiting a second, and since when (s)
+        self._waiting: list[tuple[FloatArray, FloatArray]] = []
+        self._waiting_s = -math.inf
         self._unkicked: tuple[FloatArray, FloatArray] | None = None  # our kick left it be
         self._unseen_chance = 1.0  # that a ball where believed was missed since last seen
 
@@ -374,9 +380,9 @@ class BallFilter:
                 self._candidate = self._moved_point(self._candidate, odometry)
         elif self._waiting:
             limit = self.config.start_confirm_s
-            if limit is not None and time_s - self._waiting_s > limit:
+            if limit is not None and time_s - self._waiting_s > limit + _TIME_ROUNDING_S:
                 self._waiting = []
-            self._waiting = [self._moved_point(point, odometry) for point in self._waiting]
+            self._waiting = [self._predicted(x, P, dt, odometry) for x, P in self._waiting]
         self._time_s = time_s
         measurements = [
             sighting_in_field(_ORIGIN, _NO_POSE_COV, range_m, bearing, cov)
@@ -488,20 +494,21 @@ class BallFilter:
         self, measurements: list[tuple[FloatArray, FloatArray]], time_s: float
     ) -> None:
         """Start a belief from the first of ``measurements`` (``start_confirm_s`` None), or from
-        the best-scored of them (they come best first) that agrees with a waiting sighting,
+        the best-scored of them (they come best first) within the gate of a waiting belief,
         fused into the nearest such; else they wait (module doc)."""
         if self.config.start_confirm_s is None:
             self._start(*measurements[0], time_s)
             return
         for z, R in measurements:
-            distances = [float(mahalanobis_squared(z - z0, R + R0)) for z0, R0 in self._waiting]
+            distances = [
+                float(mahalanobis_squared(z - x[:2], P[:2, :2] + R)) for x, P in self._waiting
+            ]
             if distances and min(distances) <= self._gate:
-                self._start(*self._waiting[int(np.argmin(distances))], time_s)
-                self._state, self._cov = joseph_update(
-                    self._state, self._cov, z - self._state[:2], _H, R
-                )
+                x, P = self._waiting[int(np.argmin(distances))]
+                self._start_from(*joseph_update(x, P, z - x[:2], _H, R), time_s)
                 return
-        self._waiting, self._waiting_s = list(measurements), time_s
+        self._waiting = [self._at_rest(z, R) for z, R in measurements]
+        self._waiting_s = time_s
 
     def _nearest(
         self, measurements: list[tuple[FloatArray, FloatArray]]
@@ -519,12 +526,21 @@ class BallFilter:
         """Whether two robot-frame measurements ``(z, R)`` can show the same resting ball."""
         return float(mahalanobis_squared(a[0] - b[0], a[1] + b[1])) <= self._gate
 
+    def _at_rest(self, z: FloatArray, R: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """The state (4,) and covariance (4, 4) of a ball at the measurement ``z`` (2,) with
+        covariance ``R``, at rest give or take ``initial_velocity_std_mps``."""
+        cov = np.zeros((4, 4))
+        cov[:2, :2] = R
+        cov[2:, 2:] = self.config.initial_velocity_std_mps**2 * np.eye(2)
+        return np.array([z[0], z[1], 0.0, 0.0]), cov
+
     def _start(self, z: FloatArray, R: FloatArray, time_s: float) -> None:
         """Start (or restart) the filter at the measurement ``z`` (2,) with covariance ``R``."""
-        self._state = np.array([z[0], z[1], 0.0, 0.0])
-        self._cov = np.zeros((4, 4))
-        self._cov[:2, :2] = R
-        self._cov[2:, 2:] = self.config.initial_velocity_std_mps**2 * np.eye(2)
+        self._start_from(*self._at_rest(z, R), time_s)
+
+    def _start_from(self, state: FloatArray, cov: FloatArray, time_s: float) -> None:
+        """Start (or restart) the filter at ``state`` (4,) with ``cov`` (4, 4), seen now."""
+        self._state, self._cov = state, cov
         self._known = True
         self._last_seen_s = time_s
         self._candidate = self._unkicked = None

@@ -356,34 +356,58 @@ def test_the_second_sighting_of_a_resting_ball_is_a_kalman_step() -> None:
 # --- BallFilter: a belief starts from two sightings that agree --------------------------------
 
 
-def point_of(r: float, b: float) -> FloatArray:
-    """The robot-frame point (2,) at range ``r`` and bearing ``b``."""
-    return np.array([r * math.cos(b), r * math.sin(b)])
-
-
-def test_one_sighting_starts_nothing_and_two_that_agree_start_at_their_weighted_mean() -> None:
-    """The belief the second sighting starts: the two points' information-weighted mean with
-    covariance ``(R0^-1 + R1^-1)^-1``, at rest with the initial velocity variance (no
-    correlation: the Kalman step leaves the velocity block alone). No odometry noise: the
-    waiting point is moved by an exact standstill."""
-    config = BallFilterConfig(initial_velocity_std_mps=0.6, odometry_turn_std_floor_rad=0.0)
+def test_one_sighting_starts_nothing_and_two_that_agree_start_as_one_would_after_two() -> None:
+    """Confirmed, the first of two agreeing sightings is no belief yet; after the second the
+    belief is the one the first sighting starts and the second updates (the unconfirmed rule,
+    whose second step the test below works out by hand), walking or not."""
     pose = np.array([0.5, 1.0, -0.3])
-    (r0, b0, cov0), (r1, b1, cov1) = (2.0, 0.2, COV), (2.05, 0.21, np.diag([0.06**2, 0.01**2]))
-    ball_filter = BallFilter(config)
-    first = ball_filter.update(1.0, [sighting(r0, b0, cov0)], STILL, self_pose(pose))
-    assert not first.known and first.last_seen_s == -math.inf
-    np.testing.assert_array_equal(first.relative, np.zeros(4))
-    estimate = ball_filter.update(1.1, [sighting(r1, b1, cov1)], STILL, self_pose(pose))
-    assert estimate.known and estimate.last_seen_s == 1.1
-    J0, J1 = polar_jacobian(0.0, r0, b0), polar_jacobian(0.0, r1, b1)
-    info0, info1 = np.linalg.inv(J0 @ cov0 @ J0.T), np.linalg.inv(J1 @ cov1 @ J1.T)
-    P = np.linalg.inv(info0 + info1)
-    mean = P @ (info0 @ point_of(r0, b0) + info1 @ point_of(r1, b1))
-    np.testing.assert_allclose(estimate.relative, [*mean, 0.0, 0.0], rtol=1e-10, atol=1e-13)
-    np.testing.assert_allclose(estimate.relative_cov[:2, :2], P, rtol=1e-9, atol=1e-15)
-    np.testing.assert_allclose(estimate.relative_cov[:2, 2:], np.zeros((2, 2)), atol=1e-15)
-    np.testing.assert_allclose(estimate.relative_cov[2:, 2:], 0.36 * np.eye(2), rtol=1e-12)
-    assert_psd(estimate.relative_cov)
+    first, second = sighting(2.0, 0.2), sighting(2.05, 0.21, np.diag([0.06**2, 0.01**2]))
+    for odometry in (STILL, np.array([0.03, 0.01, 0.02])):
+        estimates = []
+        for confirm in (0.3, None):
+            ball_filter = BallFilter(BallFilterConfig(start_confirm_s=confirm))
+            one = ball_filter.update(1.0, [first], STILL, self_pose(pose))
+            assert one.known == (confirm is None)
+            estimates.append(ball_filter.update(1.1, [second], odometry, self_pose(pose)))
+        confirmed, unconfirmed = estimates
+        assert confirmed.known and confirmed.last_seen_s == 1.1
+        np.testing.assert_allclose(confirmed.relative, unconfirmed.relative, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(
+            confirmed.relative_cov, unconfirmed.relative_cov, rtol=0, atol=1e-18
+        )
+        assert_psd(confirmed.relative_cov)
+
+
+def test_a_ball_rolling_past_is_believed_from_its_second_sighting() -> None:
+    """A ball rolling across the view at 1 m/s, 2 m ahead, seen from a robot standing still
+    with a sighting's noise of about a centimetre: the waiting belief rolls its velocity's
+    uncertainty on (0.5 m/s for 0.1 s), so the second sighting, 0.1 m on, agrees."""
+    pose = [0.0, 0.0, 0.0]
+    cov = np.diag([0.02**2, 0.005**2])
+    ball_filter = BallFilter()
+    for k in range(2):
+        truth = np.array([2.0, -0.5 + 1.0 * k * DT])
+        estimate = ball_filter.update(
+            k * DT, [observe(pose, truth, cov=cov)], STILL, self_pose(pose)
+        )
+        assert estimate.known == (k == 1)
+    assert estimate.state[3] > 0.3  # rolling sideways
+
+
+def test_a_sighting_start_confirm_s_later_on_summed_frame_times_still_confirms() -> None:
+    """Frame times summed step by step (0.1 three times is 0.30000000000000004): a sighting
+    three frames after the first still confirms it at start_confirm_s = 0.3."""
+    pose = [0.0, 0.0, 0.0]
+    ball_filter = BallFilter(BallFilterConfig(start_confirm_s=0.3))
+    t = 0.1
+    ball_filter.update(t, [observe(pose, [2.0, 0.0])], STILL, self_pose(pose))
+    first = t
+    for _ in range(2):
+        t += 0.1
+        ball_filter.update(t, [], STILL, self_pose(pose))
+    t += 0.1
+    assert t - first > 0.3
+    assert ball_filter.update(t, [observe(pose, [2.0, 0.0])], STILL, self_pose(pose)).known
 
 
 def test_the_first_sighting_waits_moved_with_the_robot_and_only_start_confirm_s_long() -> None:
