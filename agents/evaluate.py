@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import json
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -258,6 +259,19 @@ def training_config(spec: str) -> dict[str, Any]:
     if not isinstance(config, dict) or not isinstance(config.get("env_kwargs"), dict):
         raise ValueError(f"{files[1]} has no 'env_kwargs' object: not a training config")
     return config
+
+
+def played_steps(env: gym.Env, policy: Policy, seed: int) -> Iterator[tuple[float, dict[str, Any]]]:
+    """The steps of one episode of ``policy`` (deterministic) on ``env`` from
+    ``reset(seed=seed)``: each step's reward and ``info``, until it terminates or truncates."""
+    obs, _ = env.reset(seed=seed)
+    done, first = False, True
+    while not done:
+        action, _ = policy.predict(obs, episode_start=np.array([first]), deterministic=True)
+        first = False
+        obs, reward, terminated, truncated, info = env.step(action)
+        done = terminated or truncated
+        yield float(reward), info
 
 
 def run_episode(env: gym.Env, policy: Policy, seed: int, frame_every: int = 0) -> EpisodeRecord:

@@ -40,7 +40,7 @@ import numpy as np
 import torch
 
 import spl_env  # noqa: F401  (registers the env ids)
-from agents.evaluate import add_overrides_argument, load_policy, parse_overrides
+from agents.evaluate import add_overrides_argument, load_policy, parse_overrides, played_steps
 
 RESULTS = Path("benchmarks/results")
 NEAR_M = 3.0  # the error counts while the true ball lies this near our robot
@@ -87,13 +87,7 @@ def main() -> None:
     relative, field = [], []
     unbelieved = 0
     for seed in range(args.seed, args.seed + args.episodes):
-        obs, info = env.reset(seed=seed)
-        done, first = False, True
-        while not done:
-            action, _ = policy.predict(obs, episode_start=np.array([first]), deterministic=True)
-            first = False
-            obs, _, terminated, truncated, info = env.step(action)
-            done = terminated or truncated
+        for _, info in played_steps(env, policy, seed):
             truth, belief = info["ground_truth"], info["perception"]
             ball = relative_ball(truth)
             if np.hypot(*ball) >= NEAR_M:

@@ -39,7 +39,7 @@ import numpy as np
 import torch
 
 import spl_env  # noqa: F401  (registers the env ids)
-from agents.evaluate import add_overrides_argument, load_policy, parse_overrides
+from agents.evaluate import add_overrides_argument, load_policy, parse_overrides, played_steps
 from perception.types import BallSighting, CameraState
 from perception.vision.cnn_ball import CnnBallConfig, ball_sightings, middle_shading
 from perception.vision.cnn_detector import CnnPoleDetector
@@ -124,13 +124,7 @@ def main() -> None:
     policy = load_policy("centre_kick", env.get_wrapper_attr("config"))
     shading: dict[str, list[float | None]] = defaultdict(list)
     for seed in range(args.seed, args.seed + args.episodes):
-        obs, _ = env.reset(seed=seed)
-        done, first = False, True
-        while not done:
-            action, _ = policy.predict(obs, episode_start=np.array([first]), deterministic=True)
-            first = False
-            obs, _, terminated, truncated, _ = env.step(action)
-            done = terminated or truncated
+        for _ in played_steps(env, policy, seed):
             frame, truth = core.sensor_frame, core.world_state
             cameras = [("top", frame.image, frame.camera_state, 1)]
             if frame.bottom_image is not None and frame.bottom_camera_state is not None:

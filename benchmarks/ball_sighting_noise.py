@@ -36,7 +36,7 @@ import numpy as np
 import torch
 
 import spl_env  # noqa: F401  (registers the env ids)
-from agents.evaluate import add_overrides_argument, load_policy, parse_overrides
+from agents.evaluate import add_overrides_argument, load_policy, parse_overrides, played_steps
 from perception.types import CameraModel, CameraState
 from perception.vision.cnn_ball import CnnBallConfig, ball_sightings
 from perception.vision.ground_point import range_bearing_cov
@@ -77,13 +77,7 @@ def record(args: argparse.Namespace) -> list[dict[str, Any]]:
     policy = load_policy("centre_kick", env.get_wrapper_attr("config"))
     rows: list[dict[str, Any]] = []
     for seed in range(args.seed, args.seed + args.episodes):
-        obs, _ = env.reset(seed=seed)
-        done, first = False, True
-        while not done:
-            action, _ = policy.predict(obs, episode_start=np.array([first]), deterministic=True)
-            first = False
-            obs, _, terminated, truncated, _ = env.step(action)
-            done = terminated or truncated
+        for _ in played_steps(env, policy, seed):
             frame, truth = core.sensor_frame, core.world_state
             x, y, theta = truth.robot_pose
             c, s = math.cos(theta), math.sin(theta)

@@ -58,7 +58,7 @@ import torch
 from scipy import stats
 
 import spl_env  # registers the env ids
-from agents.evaluate import add_overrides_argument, load_policy, parse_overrides
+from agents.evaluate import add_overrides_argument, load_policy, parse_overrides, played_steps
 
 RESULTS = Path("benchmarks/results")
 RUNS = (
@@ -98,13 +98,9 @@ def run(env_id: str, player: str, args: argparse.Namespace) -> dict[str, Any]:
     position_errors, heading_errors = [], []
     start = time.perf_counter()
     for seed in range(args.seed, args.seed + args.episodes):
-        obs, info = env.reset(seed=seed)
-        done, episode_return, first = False, 0.0, True
-        while not done:
-            action, _ = policy.predict(obs, episode_start=np.array([first]), deterministic=True)
-            first = False
-            obs, reward, terminated, truncated, info = env.step(action)
-            done, episode_return = terminated or truncated, episode_return + float(reward)
+        episode_return = 0.0
+        for reward, info in played_steps(env, policy, seed):
+            episode_return += reward
             steps += 1
             truth, belief = info["ground_truth"], info["perception"]
             offset = belief["pose"] - truth["robot_pose"]
