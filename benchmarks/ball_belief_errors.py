@@ -29,11 +29,9 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import time
 from collections import defaultdict
 from pathlib import Path
-from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -41,6 +39,7 @@ import torch
 
 import spl_env  # noqa: F401  (registers the env ids)
 from agents.evaluate import add_overrides_argument, load_policy, parse_overrides, played_steps
+from perception.geometry import invert, transform_points
 
 RESULTS = Path("benchmarks/results")
 NEAR_M = 3.0  # the error counts while the true ball lies this near our robot
@@ -59,14 +58,6 @@ def error_class(error_m: float, true_speed: float, believed_speed: float) -> str
     if true_speed >= STILL_MPS:
         return "ball_moving"
     return "rest"
-
-
-def relative_ball(truth: dict[str, Any]) -> np.ndarray:
-    """The true ball (2,) in the true robot frame, from ``info["ground_truth"]``."""
-    x, y, theta = truth["robot_pose"]
-    c, s = math.cos(theta), math.sin(theta)
-    dx, dy = truth["ball"][0] - x, truth["ball"][1] - y
-    return np.array([c * dx + s * dy, -s * dx + c * dy])
 
 
 def main() -> None:
@@ -89,7 +80,7 @@ def main() -> None:
     for seed in range(args.seed, args.seed + args.episodes):
         for _, info in played_steps(env, policy, seed):
             truth, belief = info["ground_truth"], info["perception"]
-            ball = relative_ball(truth)
+            ball = transform_points(invert(truth["robot_pose"]), truth["ball"])[0]  # robot frame
             if np.hypot(*ball) >= NEAR_M:
                 continue
             if not belief["ball_known"]:

@@ -71,6 +71,20 @@ def labelled_sightings(
     return out
 
 
+def camera_frames(core: SplEnv) -> list[tuple[str, np.ndarray, CameraState, int]]:
+    """This step's frames as the ball's front end reads them: ``(name, image, camera state,
+    downscale)`` of the top camera and, where rendered, the bottom one (read at the pipeline's
+    ``bottom_downscale``)."""
+    frame = core.sensor_frame
+    frames = []
+    if frame.image is not None and frame.camera_state is not None:
+        frames.append(("top", frame.image, frame.camera_state, 1))
+    if frame.bottom_image is not None and frame.bottom_camera_state is not None:
+        downscale = core.config.perception.cnn_ball.bottom_downscale
+        frames.append(("bottom", frame.bottom_image, frame.bottom_camera_state, downscale))
+    return frames
+
+
 def camera_sightings(
     detector: CnnPoleDetector,
     image: np.ndarray,
@@ -79,14 +93,14 @@ def camera_sightings(
     config: CnnBallConfig,
     downscale: int,
 ) -> tuple[BallSighting, ...]:
-    """The ball sightings of one camera's ``image`` with the flat-box check off."""
+    """The ball sightings of one camera's ``image`` read at 1/``downscale`` with ``config``."""
     detections = (
         detector.detect_objects(image)
         if downscale == 1
         else detector.detect_objects_downscaled(image, downscale)
     )
     model = core.config.sensors.camera.model
-    return ball_sightings(detections, model, state, config, downscale, image=None)
+    return ball_sightings(detections, model, state, config, downscale, image=image)
 
 
 def summary(values: list[float | None], floor: float | None) -> dict[str, Any]:
@@ -125,20 +139,8 @@ def main() -> None:
     shading: dict[str, list[float | None]] = defaultdict(list)
     for seed in range(args.seed, args.seed + args.episodes):
         for _ in played_steps(env, policy, seed):
-            frame, truth = core.sensor_frame, core.world_state
-            cameras = [("top", frame.image, frame.camera_state, 1)]
-            if frame.bottom_image is not None and frame.bottom_camera_state is not None:
-                cameras.append(
-                    (
-                        "bottom",
-                        frame.bottom_image,
-                        frame.bottom_camera_state,
-                        pipeline.cnn_ball.bottom_downscale,
-                    )
-                )
-            for name, image, state, downscale in cameras:
-                if image is None or state is None:
-                    continue
+            truth = core.world_state
+            for name, image, state, downscale in camera_frames(core):
                 found = camera_sightings(detector, image, state, core, unjudged, downscale)
                 for sighting, label in labelled_sightings(
                     found, truth.robot_pose, truth.ball, marks

@@ -34,11 +34,13 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import torch
+from ball_flatness import camera_frames, camera_sightings  # benchmarks/ is the script's folder
 
 import spl_env  # noqa: F401  (registers the env ids)
 from agents.evaluate import add_overrides_argument, load_policy, parse_overrides, played_steps
+from perception.geometry import invert, transform_points
 from perception.types import CameraModel, CameraState
-from perception.vision.cnn_ball import CnnBallConfig, ball_sightings
+from perception.vision.cnn_ball import CnnBallConfig
 from perception.vision.ground_point import range_bearing_cov
 from spl_env.envs.core import SplEnv
 
@@ -78,34 +80,13 @@ def record(args: argparse.Namespace) -> list[dict[str, Any]]:
     rows: list[dict[str, Any]] = []
     for seed in range(args.seed, args.seed + args.episodes):
         for _ in played_steps(env, policy, seed):
-            frame, truth = core.sensor_frame, core.world_state
-            x, y, theta = truth.robot_pose
-            c, s = math.cos(theta), math.sin(theta)
-            dx, dy = truth.ball[0] - x, truth.ball[1] - y
-            ball = np.array([c * dx + s * dy, -s * dx + c * dy])  # robot frame
+            truth = core.world_state
+            ball = transform_points(invert(truth.robot_pose), truth.ball)[0]  # robot frame
             true_range, true_bearing = float(np.hypot(*ball)), math.atan2(ball[1], ball[0])
             walking = bool(np.hypot(*core.robots[0].velocity[:2]) > WALKING_MPS)
-            cameras = [("top", frame.image, frame.camera_state, 1)]
-            if frame.bottom_image is not None and frame.bottom_camera_state is not None:
-                cameras.append(
-                    (
-                        "bottom",
-                        frame.bottom_image,
-                        frame.bottom_camera_state,
-                        config.bottom_downscale,
-                    )
-                )
-            for name, image, state, downscale in cameras:
-                if image is None or state is None:
-                    continue
-                detections = (
-                    detector.detect_objects(image)
-                    if downscale == 1
-                    else detector.detect_objects_downscaled(image, downscale)
-                )
-                for sighting in ball_sightings(
-                    detections, camera, state, config, downscale, image=image
-                ):
+            for name, image, state, downscale in camera_frames(core):
+                found = camera_sightings(detector, image, state, core, config, downscale)
+                for sighting in found:
                     seen = sighting.range_m * np.array(
                         [math.cos(sighting.bearing_rad), math.sin(sighting.bearing_rad)]
                     )

@@ -34,15 +34,14 @@ instead. A sighting still outside is kept as a candidate; when the next frame's 
 with it (within the gate of their joint covariance, after the robot's motion) and still not
 with the filter, the filter restarts there (the ball was moved, or the filter had followed a
 false sighting). The first sighting starts the filter at rest with velocity std
-``initial_velocity_std_mps``; with ``start_confirm_s`` set, a belief starts so only from two
-sightings that agree. Each of a frame's sightings becomes a waiting belief, at rest with
-that velocity std, predicted from frame to frame like the belief itself (rolling, the robot's
-motion) for up to ``start_confirm_s``; the best-scored later sighting within the gate of a
-waiting belief (the nearest, by the gate's distance) is fused into it, which starts the belief,
-so that the start equals the first sighting's belief after its second; when none agrees, the
-later frame's sightings wait in their place. A single false sighting, such as the foot of a
-goal post at the image's top edge that the CNN scores just over its threshold, then starts
-nothing. The two
+``initial_velocity_std_mps``. With ``start_confirm_s`` set, it takes two sightings that
+agree: each of a frame's sightings becomes a waiting belief, started as above and predicted
+from frame to frame like the belief itself (rolling, the robot's motion) for up to
+``start_confirm_s``; the best-scored later sighting within the gate of a waiting belief (the
+nearest, by the gate's distance) is fused into it, which starts the belief, so that the start
+equals the first sighting's belief after its second; when none agrees, the later frame's
+sightings wait in their place. A single false sighting, such as the foot of a goal post at the
+image's top edge that the CNN scores just over its threshold, then starts nothing. The two
 sightings are taken as independent, though the walk's sway that tilts the camera (a part of
 their noise) changes little from one frame to the next.
 
