@@ -5,12 +5,16 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any, ClassVar
 
+import numpy as np
+
+from perception.geometry import invert, transform_points
 from perception.providers.base import PerceptionContext, Provider
 from perception.representations import (
     BALL,
     BALL_SIGHTINGS,
     IMAGE_DETECTIONS,
     ODOMETRY,
+    ROBOT_TRACKS,
     SELF_POSE,
     Prior,
 )
@@ -80,12 +84,21 @@ class TwoCameraCnnBallSightings(CnnBallSightings):
 
 class TrackedBall(Provider):
     """The ball's egocentric Kalman filter (:mod:`perception.tracking.ball_filter`): this
-    frame's ball sightings, the odometry and our own kicks, and whether the believed ball (a
-    ball of ``radius_m``) shows in the top camera's image; placed on the field with the
+    frame's ball sightings, the odometry and our own kicks, whether the believed ball (a ball
+    of ``radius_m``) shows in the top camera's image, and the confirmed robot tracks seen from
+    the believed pose (beside them a ball in view may go unseen); placed on the field with the
     believed pose."""
 
     provides = BALL
-    requires = (BALL_SIGHTINGS, ODOMETRY, SELF_POSE, "kick_velocity", "camera", "camera_state")
+    requires = (
+        BALL_SIGHTINGS,
+        ODOMETRY,
+        SELF_POSE,
+        ROBOT_TRACKS,
+        "kick_velocity",
+        "camera",
+        "camera_state",
+    )
 
     def __init__(self, config: BallFilterConfig, radius_m: float) -> None:
         self.filter = BallFilter(config)
@@ -102,6 +115,8 @@ class TrackedBall(Provider):
             raise TypeError(f"odometry must be an OdometryStep, got {type(odometry).__name__}")
         camera, state = inputs["camera"], inputs["camera_state"]
         margin = self.filter.config.view_margin
+        tracks = [track.state[:2] for track in inputs[ROBOT_TRACKS] if track.confirmed]
+        robots = transform_points(invert(pose.pose), np.array(tracks).reshape(-1, 2))
         return self.filter.update(
             time_s,
             inputs[BALL_SIGHTINGS],
@@ -109,4 +124,5 @@ class TrackedBall(Provider):
             pose,
             inputs["kick_velocity"],
             in_view=lambda point: ball_in_view(point, camera, state, self.radius_m, margin),
+            robots=robots,
         )

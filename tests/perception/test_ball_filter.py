@@ -691,6 +691,35 @@ def test_the_chance_to_see_a_ball_in_view_is_its_range_band_s(
     assert BallFilterConfig().chance_to_see(range_m) == chance
 
 
+@pytest.mark.parametrize(
+    ("robot", "near_chance", "lost_at"),
+    [
+        (None, 0.0, 3),  # no robot known: 0.2^3 < 0.01
+        ([2.0, 0.45], 0.0, None),  # a robot 0.45 m beside the ball: its misses do not count
+        ([2.0, 0.55], 0.0, 3),  # 0.55 m away: farther than near_robot_m, as in the open
+        ([2.0, 0.45], 0.5, 7),  # counted at 0.5: 0.5^7 < 0.01 <= 0.5^6
+        ([2.0, 0.45], 0.95, 3),  # at most the range band's 0.8
+    ],
+)
+def test_misses_beside_a_robot_count_at_the_near_robot_chance(
+    robot: list[float] | None, near_chance: float, lost_at: int | None
+) -> None:
+    """A resting ball believed 2 m ahead, in view and unseen for ten frames, with a robot
+    believed beside it (robot frame): lost on the frame where the product of the misses'
+    chances (0.8 in the open, at most ``near_robot_detection_chance`` within ``near_robot_m``
+    = 0.5 m) falls under ``lost_chance`` = 0.01, or never within ten frames at chance 0."""
+    pose = [0.0, 0.0, 0.0]
+    config = dataclasses.replace(EXACT_STEP, near_robot_detection_chance=near_chance)
+    assert config.chance_to_see(2.0, beside_robot=True) == min(0.8, near_chance)
+    ball_filter, t = steady_filter(pose, [2.0, 0.0], config)
+    robots = None if robot is None else [robot, [-3.0, 0.0]]
+    for k in range(1, 11):
+        estimate = ball_filter.update(
+            t + k * DT, [], STILL, self_pose(pose), in_view=always, robots=robots
+        )
+        assert estimate.known == (lost_at is None or k < lost_at), k
+
+
 def test_a_ball_where_the_camera_cannot_find_it_is_not_lost_by_misses() -> None:
     """Believed 0.4 m and 3.5 m away (a chance of 0 to see it there), in view and unseen for
     ten frames: still believed."""
@@ -875,9 +904,12 @@ def test_a_kick_from_a_ball_estimated_nearly_at_rest_is_followed_as_from_rest() 
 # --- BallFilter: false sightings and the candidate restart -------------------------------------
 
 
-def steady_filter(pose: ArrayLike, ball: ArrayLike) -> tuple[BallFilter, float]:
-    """A filter that saw a resting ``ball`` exactly for five frames; and the last frame's time."""
-    ball_filter = BallFilter(EXACT_STEP)
+def steady_filter(
+    pose: ArrayLike, ball: ArrayLike, config: BallFilterConfig | None = None
+) -> tuple[BallFilter, float]:
+    """A filter (``config``, else :data:`EXACT_STEP`) that saw a resting ``ball`` exactly for
+    five frames; and the last frame's time."""
+    ball_filter = BallFilter(config if config is not None else EXACT_STEP)
     for k in range(5):
         ball_filter.update(k * DT, [observe(pose, ball)], STILL, self_pose(pose))
     return ball_filter, 4 * DT
@@ -1009,6 +1041,8 @@ def test_time_must_be_finite_and_must_not_go_back_and_odometry_be_three_numbers(
         ({"kick_velocity": np.zeros(3)}, ValueError, "kick_velocity"),
         ({"self_pose": self_pose([math.nan, 0, 0])}, ValueError, "self_pose.pose"),
         ({"self_pose": self_pose([0, 0, 0], -np.eye(3))}, ValueError, "self_pose.pose_cov"),
+        ({"robots": [[2.0, math.nan]]}, ValueError, r"robots must be finite.*rows \[0\]"),
+        ({"robots": [1.0, 2.0, 3.0]}, ValueError, r"robots must have shape \(N, 2\)"),
     ],
 )
 def test_bad_arguments_raise_naming_them_and_leave_the_filter_as_it_was(
@@ -1082,6 +1116,10 @@ def test_reset_forgets_the_ball_the_time_and_the_candidate() -> None:
         ("start_confirm_s", 0.0),
         ("start_confirm_s", -0.1),
         ("start_confirm_s", math.nan),
+        ("near_robot_m", -0.1),
+        ("near_robot_m", math.inf),
+        ("near_robot_detection_chance", -0.1),
+        ("near_robot_detection_chance", 1.5),
     ],
 )
 def test_config_rejects_bad_values(field: str, value: float) -> None:

@@ -21,6 +21,7 @@ from perception.representations import (
     BALL_SIGHTINGS,
     IMAGE_DETECTIONS,
     ODOMETRY,
+    ROBOT_TRACKS,
     SELF_POSE,
     Prior,
 )
@@ -33,6 +34,7 @@ from perception.types import (
     GroundTruth,
     OdometryStep,
     PoleGeometry,
+    RobotTrack,
     SensorFrame,
     SlamEstimate,
 )
@@ -96,14 +98,17 @@ def cnn_frame(
         image=TEXTURED,
         camera=CAMERA,
         camera_state=STATE,
-        emulated={IMAGE_DETECTIONS: detections, SELF_POSE: slam_estimate()},
+        emulated={IMAGE_DETECTIONS: detections, SELF_POSE: slam_estimate(), ROBOT_TRACKS: ()},
     )
     return frame if kick is None else dataclasses.replace(frame, kick_velocity=kick)
 
 
 def cnn_pipeline() -> PerceptionPipeline:
     pipeline = PerceptionPipeline(
-        PipelineConfig(), context(), outputs=[BALL], emulated=[IMAGE_DETECTIONS, SELF_POSE]
+        PipelineConfig(),
+        context(),
+        outputs=[BALL],
+        emulated=[IMAGE_DETECTIONS, SELF_POSE, ROBOT_TRACKS],
     )
     pipeline.reset(POSE, np.random.default_rng(0))
     return pipeline
@@ -124,7 +129,7 @@ def test_the_default_ball_pipeline_builds_the_cnn_sightings_and_the_filter() -> 
     assert pipeline.representations.index(BALL_SIGHTINGS) < pipeline.representations.index(BALL)
     assert isinstance(pipeline.provider(BALL_SIGHTINGS), CnnBallSightings)
     assert isinstance(pipeline.provider(BALL), TrackedBall)
-    assert pipeline.emulated == frozenset({IMAGE_DETECTIONS, SELF_POSE})
+    assert pipeline.emulated == frozenset({IMAGE_DETECTIONS, SELF_POSE, ROBOT_TRACKS})
     assert pipeline.frame_inputs == frozenset(
         {"image", "camera", "camera_state", "odometry_delta", "kick_velocity"}
     )
@@ -174,6 +179,7 @@ def test_tracked_ball_refuses_a_self_pose_or_odometry_of_the_wrong_type() -> Non
         BALL_SIGHTINGS: (),
         ODOMETRY: step,
         SELF_POSE: slam_estimate(),
+        ROBOT_TRACKS: (),
         "kick_velocity": NO_KICK,
         "camera": CAMERA,
         "camera_state": STATE,
@@ -200,6 +206,7 @@ def test_tracked_ball_loses_a_ball_its_camera_shows_but_does_not_see() -> None:
             ),
             ODOMETRY: step,
             SELF_POSE: slam_estimate(),
+            ROBOT_TRACKS: (),
             "kick_velocity": NO_KICK,
             "camera": CAMERA,
             "camera_state": STATE,
@@ -208,6 +215,42 @@ def test_tracked_ball_loses_a_ball_its_camera_shows_but_does_not_see() -> None:
         for k in range(1, 11):
             known = provider.update({**inputs, BALL_SIGHTINGS: ()}, 0.1 * k).known
             assert known == (lost_at is None or k < lost_at), (bearing, k)
+
+
+def test_tracked_ball_counts_no_misses_beside_a_confirmed_robot_track() -> None:
+    """The ball of the test above, seen once 2 m along the head's direction, then never again,
+    with a robot track 0.3 m from it on the field (the pose turned and shifted): confirmed, the
+    misses beside it are not counted (the default chance 0 there) and the ball is still
+    believed after ten frames; unconfirmed, the track is not taken and the ball is lost on the
+    third frame."""
+    step = OdometryStep(delta=np.zeros(3), walk_delta=np.zeros(3))
+    beside = field_point(2.0, STATE.head_yaw) + np.array([0.0, 0.3])
+    for confirmed, lost_at in ((True, None), (False, 3)):
+        track = RobotTrack(
+            track_id=1,
+            state=np.array([*beside, 0.0, 0.0]),
+            cov=np.eye(4) * 0.01,
+            team=None,
+            confirmed=confirmed,
+            last_seen_s=0.0,
+        )
+        provider = TrackedBall(BallFilterConfig(), 0.05)
+        provider.reset(Prior(pose=POSE, rng=np.random.default_rng(0)))
+        inputs = {
+            BALL_SIGHTINGS: (
+                BallSighting(range_m=2.0, bearing_rad=STATE.head_yaw, cov=np.diag([1e-4, 1e-4])),
+            ),
+            ODOMETRY: step,
+            SELF_POSE: slam_estimate(),
+            ROBOT_TRACKS: (track,),
+            "kick_velocity": NO_KICK,
+            "camera": CAMERA,
+            "camera_state": STATE,
+        }
+        assert provider.update(inputs, 0.0).known
+        for k in range(1, 11):
+            known = provider.update({**inputs, BALL_SIGHTINGS: ()}, 0.1 * k).known
+            assert known == (lost_at is None or k < lost_at), (confirmed, k)
 
 
 def test_cnn_ball_sightings_provider_reads_the_frame_camera() -> None:
@@ -409,7 +452,9 @@ def test_the_filter_on_oracle_sightings_finds_the_resting_ball() -> None:
     """Oracle sightings (range std 0.05 m, bearing 0.01 rad) of a resting ball 2 m ahead, the
     oracle's pose: after 30 frames the filter's position error is a few centimetres."""
     pipeline = PerceptionPipeline(
-        PipelineConfig(ball_sightings="oracle", ball="filter", self_pose="oracle"),
+        PipelineConfig(
+            ball_sightings="oracle", ball="filter", self_pose="oracle", robot_sightings="oracle"
+        ),
         context(HFOV_DEG),
         outputs=[BALL],
     )
