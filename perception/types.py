@@ -218,7 +218,10 @@ class BallEstimate:
     believed pose's uncertainty included); ``relative`` (4,) the same in our robot's frame with
     ``relative_cov`` (4, 4); ``known`` False while no ball is believed: before its first
     sighting, or once lost (the states are then zero: the ball may be anywhere);
-    ``last_seen_s`` the time (s) of its last sighting (-inf before the first).
+    ``last_seen_s`` the time (s) of its last sighting (-inf before the first); ``candidate``
+    (2,) (m, robot frame) where a sighting waits for a second that agrees with it before a
+    belief starts (the best-scored such; a head looking there gives it the chance), None when
+    none waits.
     """
 
     state: FloatArray
@@ -227,6 +230,7 @@ class BallEstimate:
     relative_cov: FloatArray
     known: bool
     last_seen_s: float
+    candidate: FloatArray | None = None
 
 
 @dataclass(frozen=True, kw_only=True)

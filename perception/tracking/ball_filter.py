@@ -362,6 +362,7 @@ class BallFilter:
             relative_cov=self._cov.copy(),
             known=self._known,
             last_seen_s=self._last_seen_s,
+            candidate=None if self._known or not self._waiting else self._waiting[0][0][:2].copy(),
         )
 
     def update(

@@ -17,8 +17,10 @@ index  meaning
 A kick's direction and speed carry noise (std 6 degrees and 10 %). Without the head in the
 action it is scripted: ``"track_ball"`` looks at the believed ball while it was seen within
 ``ball_lost_after_s`` (glancing round for landmarks every ``glance_period_s`` while the ball is
-farther than ``glance_beyond_m``), and searches otherwise (the scan, its pitch swinging between
-the scan's and fully down once every two sweeps); ``"scan"`` always scans at the scan's pitch.
+farther than ``glance_beyond_m``), looks at a sighting that waits for a second one to start a
+belief (the ball filter's ``start_confirm_s``; the scan would sweep past it), and searches
+otherwise (the scan, its pitch swinging between the scan's and fully down once every two
+sweeps); ``"scan"`` always scans at the scan's pitch.
 
 The observation holds what perception believes: our pose and its std, the head's joint angles,
 the ball relative to us (:class:`spl_env.observations.ball.BallEncoder`), up to
@@ -213,6 +215,8 @@ def scripted_head(
                 yaw = c.glance_amplitude_rad * math.sin(2 * math.pi * phase / c.glance_s)
                 return np.array([yaw, c.scan_pitch_rad])
             return look_at_ball(robot, dimensions, ball.relative[:2])
+        if not ball.known and ball.candidate is not None:  # look again at a first sighting
+            return look_at_ball(robot, dimensions, ball.candidate)
     yaw = c.scan_amplitude_rad * math.sin(2 * math.pi * time_s / c.scan_period_s)
     if c.head_control == "scan":
         return np.array([yaw, c.scan_pitch_rad])

@@ -474,6 +474,28 @@ def test_every_sighting_of_a_frame_waits_and_the_best_scored_that_agrees_starts(
         np.testing.assert_allclose(estimate.state[:2], ball, atol=1e-12)
 
 
+def test_the_estimate_shows_where_a_first_sighting_waits() -> None:
+    """With the confirmed start, a single sighting at (2, 0) is the estimate's ``candidate``
+    (the best-scored of a frame's, the first); after the robot walks 0.5 m ahead it lies at
+    (1.5, 0) in the robot frame; past ``start_confirm_s`` it is gone; a started belief has none,
+    nor does a filter whose first sighting starts the belief."""
+    pose = [0.0, 0.0, 0.0]
+    ball_filter = BallFilter(CONFIRMED)
+    both = [observe(pose, [2.0, 0.0]), observe(pose, [0.5, 2.0])]
+    estimate = ball_filter.update(0.0, both, STILL, self_pose(pose))
+    assert not estimate.known and estimate.candidate is not None
+    np.testing.assert_allclose(estimate.candidate, [2.0, 0.0], atol=1e-12)
+    estimate = ball_filter.update(DT, [], np.array([0.5, 0.0, 0.0]), self_pose([0.5, 0.0, 0.0]))
+    assert estimate.candidate is not None
+    np.testing.assert_allclose(estimate.candidate, [1.5, 0.0], atol=1e-12)
+    assert ball_filter.update(0.4, [], STILL, self_pose(pose)).candidate is None
+    ball_filter.update(0.5, [observe(pose, [2.0, 0.0])], STILL, self_pose(pose))
+    estimate = ball_filter.update(0.6, [observe(pose, [2.0, 0.0])], STILL, self_pose(pose))
+    assert estimate.known and estimate.candidate is None
+    first = BallFilter(EXACT_FIRST).update(0.0, both, STILL, self_pose(pose))
+    assert first.known and first.candidate is None
+
+
 def test_reset_forgets_the_waiting_sighting() -> None:
     pose = [0.0, 0.0, 0.0]
     ball_filter = BallFilter(CONFIRMED)

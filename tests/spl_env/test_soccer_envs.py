@@ -23,9 +23,9 @@ from spl_env.observations.ball import BallEncoder
 from spl_env.observations.base import EncoderInput, unsquash
 from spl_env.observations.poles import RANGE_SCALE_M
 from spl_env.observations.self_pose import SelfPoseEncoder
-from spl_env.robots.nao import NaoRobot, RobotConfig, kick_intent, walk_target
+from spl_env.robots.nao import NaoRobot, RobotConfig, camera_state_for, kick_intent, walk_target
 from spl_env.sensors.rig import NaoRig
-from spl_env.tasks.soccer import ball_in_goal, ball_out
+from spl_env.tasks.soccer import SoccerTaskConfig, ball_in_goal, ball_out, scripted_head
 from spl_env.tasks.soccer_skills import SkillConfig, approach_and_kick, guard_goal
 
 FAST: dict[str, Any] = {"camera_mode": "geometric", "frontend": "colour", "episode_s": 3.0}
@@ -336,3 +336,33 @@ def test_emulators_draw_in_an_order_no_process_changes() -> None:
     for a, b in zip(*runs, strict=True):
         for key in a:
             np.testing.assert_array_equal(a[key], b[key])
+
+
+def test_the_scripted_head_looks_again_at_a_waiting_sighting() -> None:
+    """No ball believed: with a sighting waiting for a second (the ball filter's
+    ``candidate``), the head looks at it, by hand ``(atan2(y, x), atan2(h - r, range) -
+    camera tilt)`` with the camera's height ``h`` at that yaw; without one it scans."""
+    candidate = np.array([1.5, 0.6])
+    config = SoccerTaskConfig()
+
+    def belief(waiting: np.ndarray | None) -> PerceptionOutput:
+        ball = BallEstimate(
+            state=np.zeros(4),
+            cov=np.eye(4),
+            relative=np.zeros(4),
+            relative_cov=np.eye(4),
+            known=False,
+            last_seen_s=-math.inf,
+            candidate=waiting,
+        )
+        return PerceptionOutput(time_s=1.0, representations={BALL: ball})
+
+    head = scripted_head(config, NAO, DIMS, belief(candidate), 1.0)
+    yaw = math.atan2(0.6, 1.5)
+    height = camera_state_for(NAO, np.array([yaw, 0.0])).position[2]
+    pitch = math.atan2(height - DIMS.ball_diameter_m / 2, math.hypot(1.5, 0.6))
+    np.testing.assert_allclose(head, [yaw, pitch - NAO.camera_tilt_rad], atol=1e-12)
+    scan = scripted_head(config, NAO, DIMS, belief(None), 1.0)
+    assert scan[0] == pytest.approx(
+        config.scan_amplitude_rad * math.sin(2 * math.pi / config.scan_period_s)
+    )
