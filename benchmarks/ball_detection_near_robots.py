@@ -43,7 +43,7 @@ RESULTS = Path("benchmarks/results")
 MIN_RANGE_M = 0.6  # nearer, the top camera loses the ball at the image's bottom
 OF_BALL_M = 0.3  # a sighting this near the true ball, plus ...
 OF_BALL_FRACTION = 0.1  # ... this share of its range, is of the ball
-RANGE_BANDS_M = (0.6, 1.0, 2.0, 3.0, 5.0)
+RANGE_BANDS_M = (MIN_RANGE_M, 1.0, 2.0, 3.0, 5.0)
 ROBOT_BANDS_M = (0.0, 0.3, 0.5, 0.75, 1.0, math.inf)  # ball to the nearest other robot
 
 
@@ -86,7 +86,8 @@ def record(args: argparse.Namespace) -> np.ndarray:
             others = np.delete(truth.poses[:, :2], truth.agent, axis=0)
             nearest = float(np.min(np.hypot(*(others - truth.ball).T))) if len(others) else math.inf
             column = band(nearest, ROBOT_BANDS_M)
-            assert column is not None  # the last band is open
+            if column is None:  # the bands start at 0 and the last is open
+                raise RuntimeError(f"no robot band holds {nearest} m")
             tolerance = OF_BALL_M + OF_BALL_FRACTION * true_range
             sightings = core.perception_output[BALL_SIGHTINGS]
             seen = any(math.dist(sighting_point(s), ball) <= tolerance for s in sightings)
@@ -138,6 +139,7 @@ def main() -> None:
             {
                 "nearest_robot_m": [ROBOT_BANDS_M[j], ROBOT_BANDS_M[j + 1]],
                 "in_view": int(by_robot[j, 0]),
+                "seen": int(by_robot[j, 1]),
                 "chance": float(by_robot[j, 1] / by_robot[j, 0]) if by_robot[j, 0] else None,
             }
             for j in range(by_robot.shape[0])

@@ -292,7 +292,8 @@ class PipelineConfig:
     field_end: str = "none"  # one of PROVIDERS["field_end"]
     natural_landmarks: FieldEndProviderConfig = field(default_factory=FieldEndProviderConfig)
     # The ball: sightings from the CNN's ball boxes (the renderer's row offset taken out, as
-    # for the field features), and the ball's filter in the field frame
+    # for the field features), and the ball's filter in the field frame (ball="filter" reads
+    # the robot tracks too: beside a robot the camera's misses of the ball do not lose it)
     ball_sightings: str = "cnn"  # one of PROVIDERS["ball_sightings"]
     cnn_ball: CnnBallConfig = field(default_factory=lambda: CnnBallConfig(row_offset_px=1.0))
     ball: str = "filter"  # one of PROVIDERS["ball"]

@@ -19,7 +19,7 @@ from perception.representations import (
     Prior,
 )
 from perception.tracking.ball_filter import BallFilter, BallFilterConfig
-from perception.types import BallEstimate, BallSighting, OdometryStep, SlamEstimate
+from perception.types import BallEstimate, BallSighting, OdometryStep, RobotTrack, SlamEstimate
 from perception.vision.cnn_ball import CnnBallConfig, ball_in_view, ball_sightings
 from perception.vision.cnn_detector import CnnDetectorConfig
 
@@ -86,8 +86,9 @@ class TrackedBall(Provider):
     """The ball's egocentric Kalman filter (:mod:`perception.tracking.ball_filter`): this
     frame's ball sightings, the odometry and our own kicks, whether the believed ball (a ball
     of ``radius_m``) shows in the top camera's image, and the confirmed robot tracks seen from
-    the believed pose (beside them a ball in view may go unseen); placed on the field with the
-    believed pose."""
+    the believed pose (beside them a ball in view may go unseen: a pipeline with this filter
+    also tracks the robots); placed on the field with the believed pose. A track kept after its
+    robot was last seen counts as well, where the tracker predicts it."""
 
     provides = BALL
     requires = (
@@ -115,8 +116,11 @@ class TrackedBall(Provider):
             raise TypeError(f"odometry must be an OdometryStep, got {type(odometry).__name__}")
         camera, state = inputs["camera"], inputs["camera_state"]
         margin = self.filter.config.view_margin
-        tracks = [track.state[:2] for track in inputs[ROBOT_TRACKS] if track.confirmed]
-        robots = transform_points(invert(pose.pose), np.array(tracks).reshape(-1, 2))
+        tracks = inputs[ROBOT_TRACKS]
+        if not all(isinstance(track, RobotTrack) for track in tracks):
+            raise TypeError(f"robot_tracks must be RobotTracks, got {tracks!r}")
+        confirmed = [track.state[:2] for track in tracks if track.confirmed]
+        robots = transform_points(invert(pose.pose), np.array(confirmed).reshape(-1, 2))
         return self.filter.update(
             time_s,
             inputs[BALL_SIGHTINGS],

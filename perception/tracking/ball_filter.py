@@ -30,7 +30,7 @@ grown by ``kick_velocity_std_mps`` squared per axis (a velocity jump of that siz
 frame), and the gate tried again. A sighting that passes it is fused there if the last frame
 fused a sighting; if not, the belief had gone unconfirmed, and a jump at the last frame would
 make up a velocity to explain how far it drifted since: the filter restarts at the sighting
-instead. A sighting still outside is kept as a candidate; when the next frame's sighting agrees
+instead. A sighting still outside is kept as an outlier; when the next frame's sighting agrees
 with it (within the gate of their joint covariance, after the robot's motion) and still not
 with the filter, the filter restarts there (the ball was moved, or the filter had followed a
 false sighting). With ``start_confirm_s`` None, the first sighting starts the filter at rest
@@ -44,7 +44,8 @@ sightings wait in their place. A single false sighting, such as the foot of a go
 image's top edge that the CNN scores just over its threshold, then starts nothing. The two
 sightings are taken as independent, though the walk's sway that tilts the camera (a part of
 their noise) changes little from one frame to the next. The estimate's ``candidate`` shows
-where the best-scored sighting waits, for a head to look at it again.
+where the best-scored sighting waits, for a head to look at it again. When a belief is lost in
+a frame whose sightings it did not take, they wait so too.
 
 A belief left without sightings grows uncertain (the ball rolls on in it, or a ball stopped by a
 robot rolls on only in the belief): once its position std (the root of the trace of the
@@ -204,6 +205,7 @@ class BallFilterConfig:
             1.0,
             low_inclusive=True,
             high_inclusive=True,
+            float_only=True,
         )
         if self.start_confirm_s is not None:
             check_positive(_OWNER, "start_confirm_s", self.start_confirm_s)
@@ -343,7 +345,7 @@ class BallFilter:
         self._known = False
         self._last_seen_s = -math.inf
         self._time_s: float | None = None
-        self._candidate: tuple[FloatArray, FloatArray] | None = None
+        self._outlier: tuple[FloatArray, FloatArray] | None = None
         # beliefs (state, covariance) of sightings awaiting a second, and since when (s)
         self._waiting: list[tuple[FloatArray, FloatArray]] = []
         self._waiting_s = -math.inf
@@ -397,7 +399,10 @@ class BallFilter:
         pose, pose_cov = checked_self_pose(self_pose)
         if in_view is not None and not callable(in_view):
             raise TypeError(f"in_view must be a function of a point (2,) or None, got {in_view!r}")
-        robot_points = np.zeros((0, 2)) if robots is None else finite_points(robots, "robots")
+        robot_points = np.zeros((0, 2))
+        empty = isinstance(robots, list | tuple) and len(robots) == 0  # no robot either
+        if robots is not None and not empty:
+            robot_points = finite_points(robots, "robots")
         kick = (
             np.zeros(2)
             if kick_velocity is None
@@ -412,8 +417,8 @@ class BallFilter:
             self._state, self._cov = self._predicted(*before, dt, odometry)
             if self._unkicked is not None:
                 self._unkicked = self._predicted(*self._unkicked, dt, odometry)
-            if self._candidate is not None:
-                self._candidate = self._moved_point(self._candidate, odometry)
+            if self._outlier is not None:
+                self._outlier = self._moved_point(self._outlier, odometry)
         elif self._waiting:
             limit = self.config.start_confirm_s
             if limit is not None and time_s - self._waiting_s > limit + _TIME_ROUNDING_S:
@@ -427,7 +432,7 @@ class BallFilter:
         if measurements:
             self._fuse(measurements, time_s, before, dt, odometry, confirmed)
         else:
-            self._candidate = None  # a candidate needs the very next frame's agreement
+            self._outlier = None  # an outlier needs the very next frame's agreement
         if self._last_seen_s == time_s:
             self._unseen_chance = 1.0
         elif self._known and in_view is not None and in_view(self._state[:2].copy()):
@@ -440,13 +445,15 @@ class BallFilter:
             position_std(self._cov) > c.lost_std_m or self._unseen_chance < c.lost_chance
         ):
             self._lost()
+            if not self._known and measurements and c.start_confirm_s is not None:
+                self._wait(measurements, time_s)  # none fitted the lost belief
         return self._estimate_at(pose, pose_cov)
 
     def _lost(self) -> None:
         """The belief grew too uncertain, or went unseen in view: the ball where our last kick
         may have left it, if that is still believable; else forgotten until the next sighting
         (module doc)."""
-        unkicked, self._unkicked, self._candidate = self._unkicked, None, None
+        unkicked, self._unkicked, self._outlier = self._unkicked, None, None
         self._unseen_chance = 1.0
         if unkicked is not None and position_std(unkicked[1]) <= self.config.lost_std_m:
             self._state, self._cov = unkicked
@@ -496,7 +503,7 @@ class BallFilter:
         odometry: FloatArray,
         confirmed: bool,
     ) -> None:
-        """Fuse the measurement that fits best (module doc); a restart or a candidate else.
+        """Fuse the measurement that fits best (module doc); a restart or an outlier else.
         ``before`` is the state and covariance before this frame's prediction; ``confirmed``
         whether the last frame fused a sighting."""
         if not self._known:
@@ -520,13 +527,13 @@ class BallFilter:
                 self._state, self._cov, z - self._state[:2], _H, R
             )
             self._last_seen_s = time_s
-            self._candidate = self._unkicked = None
+            self._outlier = self._unkicked = None
             return
         z, R = measurements[0]
-        if self._candidate is not None and self._agrees(self._candidate, (z, R)):
+        if self._outlier is not None and self._agrees(self._outlier, (z, R)):
             self._start(z, R, time_s)
         else:
-            self._candidate = (z, R)
+            self._outlier = (z, R)
 
     def _confirm_start(
         self, measurements: list[tuple[FloatArray, FloatArray]], time_s: float
@@ -545,6 +552,11 @@ class BallFilter:
                 x, P = self._waiting[int(np.argmin(distances))]
                 self._start_from(*joseph_update(x, P, z - x[:2], _H, R), time_s)
                 return
+        self._wait(measurements, time_s)
+
+    def _wait(self, measurements: list[tuple[FloatArray, FloatArray]], time_s: float) -> None:
+        """Each of ``measurements`` (best-scored first) waits, from ``time_s``, for a second
+        sighting that agrees with it."""
         self._waiting = [self._at_rest(z, R) for z, R in measurements]
         self._waiting_s = time_s
 
@@ -581,5 +593,5 @@ class BallFilter:
         self._state, self._cov = state, cov
         self._known = True
         self._last_seen_s = time_s
-        self._candidate = self._unkicked = None
+        self._outlier = self._unkicked = None
         self._waiting = []

@@ -3,7 +3,8 @@
 Each is also registered without poles (``SPL/Striker-NoPoles-v0`` and so on:
 :data:`spl_env.NO_POLES_KWARGS`, the pose from the field's features). Our robot's body is the
 action (where to walk, when and where to kick); the head is scripted (looks at the believed
-ball, scans when it is lost) or, with ``head_control="action"``, part of the action. Every
+ball, or at a first sighting awaiting a second, scans when it is lost) or, with
+``head_control="action"``, part of the action. Every
 observation key is what perception believes; the scripted opponents and the rewards use the
 truth.
 """

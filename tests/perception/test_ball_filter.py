@@ -496,11 +496,38 @@ def test_the_estimate_shows_where_a_first_sighting_waits() -> None:
     assert first.known and first.candidate is None
 
 
+def test_a_waiting_sighting_shows_until_start_confirm_s_and_no_longer() -> None:
+    pose = [0.0, 0.0, 0.0]
+    ball_filter = BallFilter(CONFIRMED)
+    ball_filter.update(0.0, [observe(pose, [2.0, 0.0])], STILL, self_pose(pose))
+    for k in (1, 2, 3):  # 0.1 s apart, summed: 0.30000000000000004 s is still 0.3 s
+        assert ball_filter.update(k * DT, [], STILL, self_pose(pose)).candidate is not None, k
+    assert ball_filter.update(4 * DT, [], STILL, self_pose(pose)).candidate is None
+
+
+def test_a_lost_belief_leaves_the_frame_s_unfitting_sightings_waiting() -> None:
+    """A ball believed 2 m ahead, in view and unseen twice; the third frame sees something
+    at (1, 1) outside the gate: the belief is lost (0.2³ < 0.01) and that sighting waits,
+    shown as the candidate; the next agreeing sighting starts the belief there."""
+    pose = [0.0, 0.0, 0.0]
+    ball_filter, t = steady_filter(pose, [2.0, 0.0])
+    for k in (1, 2):
+        ball_filter.update(t + k * DT, [], STILL, self_pose(pose), in_view=always)
+    elsewhere = [observe(pose, [1.0, 1.0])]
+    estimate = ball_filter.update(t + 3 * DT, elsewhere, STILL, self_pose(pose), in_view=always)
+    assert not estimate.known and estimate.candidate is not None
+    np.testing.assert_allclose(estimate.candidate, [1.0, 1.0], atol=1e-12)
+    estimate = ball_filter.update(t + 4 * DT, elsewhere, STILL, self_pose(pose), in_view=always)
+    assert estimate.known
+    np.testing.assert_allclose(estimate.relative[:2], [1.0, 1.0], atol=1e-12)
+
+
 def test_reset_forgets_the_waiting_sighting() -> None:
     pose = [0.0, 0.0, 0.0]
     ball_filter = BallFilter(CONFIRMED)
     ball_filter.update(0.0, [observe(pose, [2.0, 0.0])], STILL, self_pose(pose))
     ball_filter.reset()
+    assert ball_filter.estimate(self_pose(pose)).candidate is None
     estimate = ball_filter.update(DT, [observe(pose, [2.0, 0.0])], STILL, self_pose(pose))
     assert not estimate.known
 
@@ -716,7 +743,7 @@ def test_the_chance_to_see_a_ball_in_view_is_its_range_band_s(
 @pytest.mark.parametrize(
     ("robot", "near_chance", "lost_at"),
     [
-        (None, 0.0, 3),  # no robot known: 0.2^3 < 0.01
+        (None, 0.0, 3),  # no robot known ([]): 0.2^3 < 0.01
         ([2.0, 0.45], 0.0, None),  # a robot 0.45 m beside the ball: its misses do not count
         ([2.0, 0.55], 0.0, 3),  # 0.55 m away: farther than near_robot_m, as in the open
         ([2.0, 0.45], 0.5, 7),  # counted at 0.5: 0.5^7 < 0.01 <= 0.5^6
@@ -734,7 +761,7 @@ def test_misses_beside_a_robot_count_at_the_near_robot_chance(
     config = dataclasses.replace(EXACT_STEP, near_robot_detection_chance=near_chance)
     assert config.chance_to_see(2.0, beside_robot=True) == min(0.8, near_chance)
     ball_filter, t = steady_filter(pose, [2.0, 0.0], config)
-    robots = None if robot is None else [robot, [-3.0, 0.0]]
+    robots = [] if robot is None else [robot, [-3.0, 0.0]]  # [] is no robot, as None
     for k in range(1, 11):
         estimate = ball_filter.update(
             t + k * DT, [], STILL, self_pose(pose), in_view=always, robots=robots
@@ -1090,10 +1117,10 @@ def test_bad_arguments_raise_naming_them_and_leave_the_filter_as_it_was(
     np.testing.assert_array_equal(after.relative_cov, clean.relative_cov)
 
 
-def test_reset_forgets_the_ball_the_time_and_the_candidate() -> None:
+def test_reset_forgets_the_ball_the_time_and_the_outlier() -> None:
     pose = [0.0, 0.0, 0.0]
     ball_filter, t = steady_filter(pose, [2.0, 0.0])
-    ball_filter.update(t + DT, [observe(pose, [0.5, 2.0])], STILL, self_pose(pose))  # candidate
+    ball_filter.update(t + DT, [observe(pose, [0.5, 2.0])], STILL, self_pose(pose))  # outlier
     ball_filter.reset()
     estimate = ball_filter.estimate(self_pose(pose))
     assert not estimate.known and estimate.last_seen_s == -math.inf

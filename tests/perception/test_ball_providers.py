@@ -192,6 +192,8 @@ def test_tracked_ball_refuses_a_self_pose_or_odometry_of_the_wrong_type() -> Non
         provider.update({**good, SELF_POSE: POSE}, 0.1)
     with pytest.raises(TypeError, match="odometry"):
         provider.update({**good, ODOMETRY: np.zeros(3)}, 0.1)
+    with pytest.raises(TypeError, match="robot_tracks must be RobotTracks"):
+        provider.update({**good, ROBOT_TRACKS: (np.zeros(4),)}, 0.1)
 
 
 def test_tracked_ball_loses_a_ball_its_camera_shows_but_does_not_see() -> None:
