@@ -196,31 +196,42 @@ def test_tracked_ball_refuses_a_self_pose_or_odometry_of_the_wrong_type() -> Non
         provider.update({**good, ROBOT_TRACKS: (np.zeros(4),)}, 0.1)
 
 
+def known_through_misses(bearing: float, tracks: tuple[RobotTrack, ...]) -> list[bool]:
+    """Whether a :class:`TrackedBall` (default config) still believes a ball after each of ten
+    frames without sightings, the ball seen 2 m away at ``bearing`` at 0.0 and 0.1 s (the
+    second sighting starts the belief), with the robot ``tracks`` believed throughout."""
+    provider = TrackedBall(BallFilterConfig(), 0.05)
+    provider.reset(Prior(pose=POSE, rng=np.random.default_rng(0)))
+    inputs = {
+        BALL_SIGHTINGS: (
+            BallSighting(range_m=2.0, bearing_rad=bearing, cov=np.diag([1e-4, 1e-4])),
+        ),
+        ODOMETRY: OdometryStep(delta=np.zeros(3), walk_delta=np.zeros(3)),
+        SELF_POSE: slam_estimate(),
+        ROBOT_TRACKS: tracks,
+        "kick_velocity": NO_KICK,
+        "camera": CAMERA,
+        "camera_state": STATE,
+    }
+    assert not provider.update(inputs, 0.0).known  # waits for a second sighting
+    assert provider.update(inputs, 0.1).known
+    empty = {**inputs, BALL_SIGHTINGS: ()}
+    return [provider.update(empty, 0.1 + 0.1 * k).known for k in range(1, 11)]
+
+
+def lost_on(frame: int | None) -> list[bool]:
+    """The beliefs of :func:`known_through_misses` for a ball lost on miss ``frame`` (None:
+    never)."""
+    return [frame is None or k < frame for k in range(1, 11)]
+
+
 def test_tracked_ball_loses_a_ball_its_camera_shows_but_does_not_see() -> None:
     """A ball seen twice 2 m along the head's direction (the camera's centre column), then never
     again: lost on the third frame (the chance to see it there 0.8: 0.2³ < 0.01); the same
     ball seen behind the robot, where the camera does not look, is still believed after ten
     frames. The provider's in_view reads the frame's camera and its state."""
-    step = OdometryStep(delta=np.zeros(3), walk_delta=np.zeros(3))
     for bearing, lost_at in ((STATE.head_yaw, 3), (math.pi, None)):
-        provider = TrackedBall(BallFilterConfig(), 0.05)
-        provider.reset(Prior(pose=POSE, rng=np.random.default_rng(0)))
-        inputs = {
-            BALL_SIGHTINGS: (
-                BallSighting(range_m=2.0, bearing_rad=bearing, cov=np.diag([1e-4, 1e-4])),
-            ),
-            ODOMETRY: step,
-            SELF_POSE: slam_estimate(),
-            ROBOT_TRACKS: (),
-            "kick_velocity": NO_KICK,
-            "camera": CAMERA,
-            "camera_state": STATE,
-        }
-        assert not provider.update(inputs, 0.0).known  # waits for a second sighting
-        assert provider.update(inputs, 0.1).known
-        for k in range(1, 11):
-            known = provider.update({**inputs, BALL_SIGHTINGS: ()}, 0.1 + 0.1 * k).known
-            assert known == (lost_at is None or k < lost_at), (bearing, k)
+        assert known_through_misses(bearing, ()) == lost_on(lost_at), bearing
 
 
 def test_tracked_ball_counts_no_misses_beside_a_confirmed_robot_track() -> None:
@@ -229,7 +240,6 @@ def test_tracked_ball_counts_no_misses_beside_a_confirmed_robot_track() -> None:
     misses beside it are not counted (the default chance 0 there) and the ball is still
     believed after ten frames; unconfirmed, the track is not taken and the ball is lost on the
     third frame."""
-    step = OdometryStep(delta=np.zeros(3), walk_delta=np.zeros(3))
     beside = field_point(2.0, STATE.head_yaw) + np.array([0.0, 0.3])
     for confirmed, lost_at in ((True, None), (False, 3)):
         track = RobotTrack(
@@ -240,24 +250,7 @@ def test_tracked_ball_counts_no_misses_beside_a_confirmed_robot_track() -> None:
             confirmed=confirmed,
             last_seen_s=0.0,
         )
-        provider = TrackedBall(BallFilterConfig(), 0.05)
-        provider.reset(Prior(pose=POSE, rng=np.random.default_rng(0)))
-        inputs = {
-            BALL_SIGHTINGS: (
-                BallSighting(range_m=2.0, bearing_rad=STATE.head_yaw, cov=np.diag([1e-4, 1e-4])),
-            ),
-            ODOMETRY: step,
-            SELF_POSE: slam_estimate(),
-            ROBOT_TRACKS: (track,),
-            "kick_velocity": NO_KICK,
-            "camera": CAMERA,
-            "camera_state": STATE,
-        }
-        assert not provider.update(inputs, 0.0).known  # waits for a second sighting
-        assert provider.update(inputs, 0.1).known
-        for k in range(1, 11):
-            known = provider.update({**inputs, BALL_SIGHTINGS: ()}, 0.1 + 0.1 * k).known
-            assert known == (lost_at is None or k < lost_at), (confirmed, k)
+        assert known_through_misses(STATE.head_yaw, (track,)) == lost_on(lost_at), confirmed
 
 
 def test_cnn_ball_sightings_provider_reads_the_frame_camera() -> None:
