@@ -158,6 +158,10 @@ class BallFilterConfig:
     # misses, the rendered goalie had kept out 38 % of the shots against 62 % (held-out seeds
     # 100-149); with both, 58 %, and 48 % against 46 % on seeds 200-249 (docs/measurements.md)
     start_confirm_s: float | None = 0.3
+    # ... except that a sighting the detector scored this or more starts a belief at once (None:
+    # every start waits). The geometric mode's emulated sightings score 1 and make no false
+    # ones (see docs/measurements.md for the choice).
+    start_at_once_score: float | None = None
     # in view (the provider's in_view): this share of the image's size inside its edges
     view_margin: float = 0.1
     # The walk odometry's noise as the filter takes it (a share of each step's distance and
@@ -209,6 +213,16 @@ class BallFilterConfig:
         )
         if self.start_confirm_s is not None:
             check_positive(_OWNER, "start_confirm_s", self.start_confirm_s)
+        if self.start_at_once_score is not None:
+            check_in_interval(
+                _OWNER,
+                "start_at_once_score",
+                self.start_at_once_score,
+                0.0,
+                1.0,
+                high_inclusive=True,
+                float_only=True,
+            )
         pairs = self.detection_chance
         if not isinstance(pairs, tuple) or not all(
             isinstance(pair, tuple) and len(pair) == 2 for pair in pairs
@@ -396,6 +410,9 @@ class BallFilter:
             raise ValueError(f"time_s must not go back: {time_s} after {self._time_s}")
         odometry = finite_vector(odometry, "odometry", 3)
         checked = checked_sightings(sightings, BallSighting)
+        for i, sighting in enumerate(sightings):
+            check_finite(f"sightings[{i}]", "score", sighting.score)
+        best_score = max((float(sighting.score) for sighting in sightings), default=0.0)
         pose, pose_cov = checked_self_pose(self_pose)
         if in_view is not None and not callable(in_view):
             raise TypeError(f"in_view must be a function of a point (2,) or None, got {in_view!r}")
@@ -430,7 +447,7 @@ class BallFilter:
             for range_m, bearing, cov in checked
         ]
         if measurements:
-            self._fuse(measurements, time_s, before, dt, odometry, confirmed)
+            self._fuse(measurements, time_s, before, dt, odometry, confirmed, best_score)
         else:
             self._outlier = None  # an outlier needs the very next frame's agreement
         if self._last_seen_s == time_s:
@@ -502,12 +519,13 @@ class BallFilter:
         dt: float,
         odometry: FloatArray,
         confirmed: bool,
+        best_score: float,
     ) -> None:
         """Fuse the measurement that fits best (module doc); a restart or an outlier else.
         ``before`` is the state and covariance before this frame's prediction; ``confirmed``
-        whether the last frame fused a sighting."""
+        whether the last frame fused a sighting; ``best_score`` the best sighting's score."""
         if not self._known:
-            self._confirm_start(measurements, time_s)
+            self._confirm_start(measurements, time_s, best_score)
             return
         best = self._nearest(measurements)
         if best is None:  # perhaps kicked since the last frame: a velocity jump then
@@ -536,12 +554,14 @@ class BallFilter:
             self._outlier = (z, R)
 
     def _confirm_start(
-        self, measurements: list[tuple[FloatArray, FloatArray]], time_s: float
+        self, measurements: list[tuple[FloatArray, FloatArray]], time_s: float, best_score: float
     ) -> None:
         """Start a belief from the first of ``measurements`` (``start_confirm_s`` None), or from
         the best-scored of them (they come best first) within the gate of a waiting belief,
-        fused into the nearest such; else they wait (module doc)."""
-        if self.config.start_confirm_s is None:
+        fused into the nearest such, or from the first when ``best_score`` reaches
+        ``start_at_once_score``; else they wait (module doc)."""
+        c = self.config
+        if c.start_confirm_s is None:
             self._start(*measurements[0], time_s)
             return
         for z, R in measurements:
@@ -552,6 +572,9 @@ class BallFilter:
                 x, P = self._waiting[int(np.argmin(distances))]
                 self._start_from(*joseph_update(x, P, z - x[:2], _H, R), time_s)
                 return
+        if c.start_at_once_score is not None and best_score >= c.start_at_once_score:
+            self._start(*measurements[0], time_s)
+            return
         self._wait(measurements, time_s)
 
     def _wait(self, measurements: list[tuple[FloatArray, FloatArray]], time_s: float) -> None:

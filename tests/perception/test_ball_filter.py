@@ -522,6 +522,24 @@ def test_a_lost_belief_leaves_the_frame_s_unfitting_sightings_waiting() -> None:
     np.testing.assert_allclose(estimate.relative[:2], [1.0, 1.0], atol=1e-12)
 
 
+@pytest.mark.parametrize(("score", "at_once"), [(0.8, True), (0.7, True), (0.69, False)])
+def test_a_sighting_scored_start_at_once_score_or_more_starts_a_belief_at_once(
+    score: float, at_once: bool
+) -> None:
+    """With ``start_at_once_score`` 0.7, a sighting at (2, 0) scored 0.7 or more starts the
+    belief there at once, as the first sighting did without the confirmed start; one scored
+    less waits for a second (shown as the candidate)."""
+    pose = [0.0, 0.0, 0.0]
+    config = dataclasses.replace(CONFIRMED, start_at_once_score=0.7)
+    seen = dataclasses.replace(observe(pose, [2.0, 0.0]), score=score)
+    estimate = BallFilter(config).update(0.0, [seen], STILL, self_pose(pose))
+    first = BallFilter(EXACT_FIRST).update(0.0, [seen], STILL, self_pose(pose))
+    assert estimate.known == at_once and (estimate.candidate is None) == at_once
+    if at_once:
+        np.testing.assert_array_equal(estimate.relative, first.relative)
+        np.testing.assert_array_equal(estimate.relative_cov, first.relative_cov)
+
+
 def test_reset_forgets_the_waiting_sighting() -> None:
     pose = [0.0, 0.0, 0.0]
     ball_filter = BallFilter(CONFIRMED)
@@ -1091,6 +1109,11 @@ def test_time_must_be_finite_and_must_not_go_back_and_odometry_be_three_numbers(
         ({"self_pose": self_pose([math.nan, 0, 0])}, ValueError, "self_pose.pose"),
         ({"self_pose": self_pose([0, 0, 0], -np.eye(3))}, ValueError, "self_pose.pose_cov"),
         ({"robots": [[2.0, math.nan]]}, ValueError, r"robots must be finite.*rows \[0\]"),
+        (
+            {"sightings": [dataclasses.replace(sighting(2.0, 0.1), score=math.nan)]},
+            ValueError,
+            r"sightings\[0\]\.score",
+        ),
         ({"robots": [1.0, 2.0, 3.0]}, ValueError, r"robots must have shape \(N, 2\)"),
     ],
 )
@@ -1165,6 +1188,9 @@ def test_reset_forgets_the_ball_the_time_and_the_outlier() -> None:
         ("start_confirm_s", 0.0),
         ("start_confirm_s", -0.1),
         ("start_confirm_s", math.nan),
+        ("start_at_once_score", 0.0),
+        ("start_at_once_score", 1.5),
+        ("start_at_once_score", math.nan),
         ("near_robot_m", -0.1),
         ("near_robot_m", math.inf),
         ("near_robot_detection_chance", -0.1),
