@@ -263,7 +263,8 @@ def test_the_robot_motion_moves_the_frame_and_its_noise_is_first_order(
 EXACT_STEP = BallFilterConfig(odometry_turn_std_floor_rad=0.0)  # no odometry noise standing still
 # ... and the first sighting starts the filter (unconfirmed)
 EXACT_FIRST = dataclasses.replace(EXACT_STEP, start_confirm_s=None)
-CONFIRMED = BallFilterConfig(start_confirm_s=0.3)  # a belief starts from two agreeing sightings
+# a belief starts from two agreeing sightings, whatever their score
+CONFIRMED = BallFilterConfig(start_confirm_s=0.3, start_at_once_score=None)
 
 
 def test_the_ball_is_unknown_before_the_first_sighting() -> None:
@@ -318,6 +319,7 @@ def test_the_second_sighting_of_a_resting_ball_is_a_kalman_step(confirm_s: float
         initial_velocity_std_mps=0.4,
         odometry_turn_std_floor_rad=0.0,
         start_confirm_s=confirm_s,
+        start_at_once_score=None,
     )
     pose = np.array([-1.0, 0.5, -0.8])
     ball_filter = BallFilter(config)
@@ -370,7 +372,9 @@ def test_a_walking_robot_confirms_as_the_first_sighting_would_have_started() -> 
     odometry = np.array([0.03, 0.01, 0.02])
     estimates = []
     for confirm in (0.3, None):
-        ball_filter = BallFilter(BallFilterConfig(start_confirm_s=confirm))
+        ball_filter = BallFilter(
+            BallFilterConfig(start_confirm_s=confirm, start_at_once_score=None)
+        )
         one = ball_filter.update(1.0, [first], STILL, self_pose(pose))
         assert one.known == (confirm is None)
         estimates.append(ball_filter.update(1.1, [second], odometry, self_pose(pose)))
@@ -401,7 +405,7 @@ def test_a_sighting_start_confirm_s_later_on_summed_frame_times_still_confirms()
     """Frame times summed step by step (0.1 three times is 0.30000000000000004): a sighting
     three frames after the first still confirms it at start_confirm_s = 0.3."""
     pose = [0.0, 0.0, 0.0]
-    ball_filter = BallFilter(BallFilterConfig(start_confirm_s=0.3))
+    ball_filter = BallFilter(CONFIRMED)
     t = 0.1
     ball_filter.update(t, [observe(pose, [2.0, 0.0])], STILL, self_pose(pose))
     first = t
@@ -424,7 +428,7 @@ def test_the_first_sighting_waits_moved_with_the_robot_and_only_start_confirm_s_
         return np.array([0.1 * k, 0.0, 0.0])
 
     for gap, starts in ((2, True), (4, False)):
-        ball_filter = BallFilter(BallFilterConfig(start_confirm_s=0.25))
+        ball_filter = BallFilter(dataclasses.replace(CONFIRMED, start_confirm_s=0.25))
         ball_filter.update(0.0, [observe(pose_at(0), ball)], STILL, self_pose(pose_at(0)))
         for k in range(1, gap):
             estimate = ball_filter.update(k * DT, [], step, self_pose(pose_at(k)))

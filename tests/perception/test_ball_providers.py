@@ -70,9 +70,12 @@ def slam_estimate(pose: FloatArray = POSE) -> SlamEstimate:
     )
 
 
-def ball_detection(range_m: float, bearing: float, rows_up: float = 1.0) -> Detection:
-    """The CNN's box of a ball at ``range_m``, ``bearing`` (robot frame) seen from ``STATE``,
-    drawn ``rows_up`` rows higher than the camera model (PyBullet's renderer: one row)."""
+def ball_detection(
+    range_m: float, bearing: float, rows_up: float = 1.0, score: float = 0.9
+) -> Detection:
+    """The CNN's box (scored ``score``) of a ball at ``range_m``, ``bearing`` (robot frame) seen
+    from ``STATE``, drawn ``rows_up`` rows higher than the camera model (PyBullet's renderer:
+    one row)."""
     centre = np.array([range_m * math.cos(bearing), range_m * math.sin(bearing), RADIUS])
     cam = (centre - STATE.position) @ STATE.rotation()
     (pixel,), front = project_points(cam[None], CAMERA.fx, CAMERA.fy, CAMERA.cx, CAMERA.cy)
@@ -80,7 +83,7 @@ def ball_detection(range_m: float, bearing: float, rows_up: float = 1.0) -> Dete
     half = RADIUS * CAMERA.fx / float(np.linalg.norm(centre - STATE.position))
     u, v = pixel[0], pixel[1] - rows_up
     box = np.array([u - half, v - half, u + half, v + half])
-    return Detection(class_name="ball", class_id=1, box=box, score=0.9, keypoint=np.array([u, v]))
+    return Detection(class_name="ball", class_id=1, box=box, score=score, keypoint=np.array([u, v]))
 
 
 # Uniform noise over 0-255: no box is flat in it (the sightings' flat-box check passes them)
@@ -139,9 +142,10 @@ def test_the_default_ball_pipeline_builds_the_cnn_sightings_and_the_filter() -> 
 
 def test_a_ball_box_becomes_a_ball_on_the_field() -> None:
     """A box drawn one row high (the default config takes the renderer's row out) of a ball at
-    2 m, 0.3 rad: the sighting reads that range and bearing and waits there (the default
-    confirmed start); the same box a frame later starts the filter there, on the field from
-    the believed pose; without sightings it keeps the ball; a reset forgets it."""
+    2 m, 0.3 rad, scored 0.9: the sighting reads that range and bearing and the filter starts
+    there at once (the default start_at_once_score 0.7), on the field from the believed pose;
+    without sightings it keeps the ball; a reset forgets it. The same box scored 0.5 waits for
+    a second (shown as the candidate), which starts the belief there."""
     pipeline = cnn_pipeline()
     out = pipeline.step(cnn_frame(0.0, (ball_detection(2.0, 0.3),)))
     (seen,) = out[BALL_SIGHTINGS]
@@ -149,28 +153,32 @@ def test_a_ball_box_becomes_a_ball_on_the_field() -> None:
     assert seen.range_m == pytest.approx(2.0, abs=1e-6)
     assert seen.bearing_rad == pytest.approx(0.3, abs=1e-6)
     relative = [2.0 * math.cos(0.3), 2.0 * math.sin(0.3)]
-    assert not out[BALL].known and out[BALL].candidate is not None
-    np.testing.assert_allclose(out[BALL].candidate, relative, atol=1e-6)
-    ball = pipeline.step(cnn_frame(0.1, (ball_detection(2.0, 0.3),)))[BALL]
-    assert isinstance(ball, BallEstimate) and ball.known and ball.last_seen_s == 0.1
+    ball = out[BALL]
+    assert isinstance(ball, BallEstimate) and ball.known and ball.last_seen_s == 0.0
     np.testing.assert_allclose(ball.state[:2], field_point(2.0, 0.3), atol=1e-6)
     np.testing.assert_allclose(ball.state[2:], 0.0, atol=1e-12)
     np.testing.assert_allclose(ball.relative[:2], relative, atol=1e-6)
-    out = pipeline.step(cnn_frame(0.2, ()))
+    out = pipeline.step(cnn_frame(0.1, ()))
     assert out[BALL_SIGHTINGS] == ()
-    assert out[BALL].known and out[BALL].last_seen_s == 0.1
+    assert out[BALL].known and out[BALL].last_seen_s == 0.0
     np.testing.assert_allclose(out[BALL].state[:2], field_point(2.0, 0.3), atol=1e-6)
-    out = pipeline.step(cnn_frame(0.3, (ball_detection(2.02, 0.3),)))
-    assert out[BALL].last_seen_s == 0.3
+    out = pipeline.step(cnn_frame(0.2, (ball_detection(2.02, 0.3),)))
+    assert out[BALL].last_seen_s == 0.2
     pipeline.reset(POSE, np.random.default_rng(0))
     out = pipeline.step(cnn_frame(0.0, ()))
     assert not out[BALL].known and out[BALL].last_seen_s == -math.inf
+    doubtful = (ball_detection(2.0, 0.3, score=0.5),)
+    out = pipeline.step(cnn_frame(0.1, doubtful))
+    assert not out[BALL].known and out[BALL].candidate is not None
+    np.testing.assert_allclose(out[BALL].candidate, relative, atol=1e-6)
+    out = pipeline.step(cnn_frame(0.2, doubtful))
+    assert out[BALL].known and out[BALL].last_seen_s == 0.2
+    np.testing.assert_allclose(out[BALL].state[:2], field_point(2.0, 0.3), atol=1e-6)
 
 
 def test_a_robot_that_cannot_kick_still_tracks_the_ball() -> None:
     pipeline = cnn_pipeline()
-    for time_s in (0.0, 0.1):  # the second sighting starts the belief
-        out = pipeline.step(cnn_frame(time_s, (ball_detection(2.0, 0.3),), kick=None))
+    out = pipeline.step(cnn_frame(0.0, (ball_detection(2.0, 0.3),), kick=None))
     assert out[BALL].known
 
 
@@ -198,13 +206,14 @@ def test_tracked_ball_refuses_a_self_pose_or_odometry_of_the_wrong_type() -> Non
 
 def known_through_misses(bearing: float, tracks: tuple[RobotTrack, ...]) -> list[bool]:
     """Whether a :class:`TrackedBall` (default config) still believes a ball after each of ten
-    frames without sightings, the ball seen 2 m away at ``bearing`` at 0.0 and 0.1 s (the
-    second sighting starts the belief), with the robot ``tracks`` believed throughout."""
+    frames without sightings, the ball seen 2 m away at ``bearing`` at 0.0 and 0.1 s (scored
+    0.5, under ``start_at_once_score``: the second sighting starts the belief), with the robot
+    ``tracks`` believed throughout."""
     provider = TrackedBall(BallFilterConfig(), 0.05)
     provider.reset(Prior(pose=POSE, rng=np.random.default_rng(0)))
     inputs = {
         BALL_SIGHTINGS: (
-            BallSighting(range_m=2.0, bearing_rad=bearing, cov=np.diag([1e-4, 1e-4])),
+            BallSighting(range_m=2.0, bearing_rad=bearing, cov=np.diag([1e-4, 1e-4]), score=0.5),
         ),
         ODOMETRY: OdometryStep(delta=np.zeros(3), walk_delta=np.zeros(3)),
         SELF_POSE: slam_estimate(),
@@ -473,7 +482,6 @@ def test_the_filter_on_oracle_sightings_finds_the_resting_ball() -> None:
             truth=truth,
         )
         out = pipeline.step(frame)
-        # the first sighting waits for the second (the default confirmed start)
-        assert out[BALL].last_seen_s == (pytest.approx(0.1 * k) if k else -math.inf)
+        assert out[BALL].last_seen_s == pytest.approx(0.1 * k)
     assert np.linalg.norm(out[BALL].state[:2] - truth.ball) < 0.1
     assert np.linalg.norm(out[BALL].relative[:2] - rot(-POSE[2]) @ (truth.ball - POSE[:2])) < 0.05
