@@ -156,7 +156,8 @@ class BallFilterConfig:
     # frames, no belief ever starts. The scripted soccer head looks at the waiting sighting
     # (BallEstimate.candidate): without that, and with a ball at rest beside a robot lost by
     # misses, the rendered goalie had kept out 38 % of the shots against 62 % (held-out seeds
-    # 100-149); with both, 58 %, and 48 % against 46 % on seeds 200-249 (docs/measurements.md)
+    # 100-149); with both and start_at_once_score, 60 %, and 52 % against 46 % on seeds
+    # 200-249 (docs/measurements.md)
     start_confirm_s: float | None = 0.3
     # ... except that a sighting the detector scored this or more starts a belief at once (None:
     # every start waits). The false sightings that had started beliefs scored 0.40-0.58. On
