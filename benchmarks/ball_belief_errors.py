@@ -27,7 +27,6 @@ Writes ``ball_belief_errors.json`` (``--name``) to ``--out`` (``benchmarks/resul
 
 from __future__ import annotations
 
-import argparse
 import json
 import time
 from collections import defaultdict
@@ -36,9 +35,10 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import torch
+from ball_flatness import episodes_parser  # benchmarks/ is the script's folder
 
 import spl_env  # noqa: F401  (registers the env ids)
-from agents.evaluate import add_overrides_argument, load_policy, parse_overrides, played_steps
+from agents.evaluate import load_policy, parse_overrides, played_steps
 from perception.geometry import invert, transform_points
 
 RESULTS = Path("benchmarks/results")
@@ -61,15 +61,7 @@ def error_class(error_m: float, true_speed: float, believed_speed: float) -> str
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--env", default="SPL/Striker-v0")
-    parser.add_argument("--player", default="centre_kick")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--episodes", type=int, default=16)
-    parser.add_argument("--name", default="ball_belief_errors")
-    add_overrides_argument(parser)
-    parser.add_argument("--out", type=Path, default=RESULTS)
-    args = parser.parse_args()
+    args = episodes_parser(__doc__, "ball_belief_errors", player="centre_kick").parse_args()
     torch.set_num_threads(1)
     start = time.perf_counter()
     env = gym.make(args.env, **parse_overrides(args.set))

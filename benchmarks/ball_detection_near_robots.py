@@ -30,9 +30,10 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import torch
+from ball_flatness import episodes_parser  # benchmarks/ is the script's folder
 
 import spl_env  # noqa: F401  (registers the env ids)
-from agents.evaluate import add_overrides_argument, load_policy, parse_overrides, played_steps
+from agents.evaluate import load_policy, parse_overrides, played_steps
 from perception.geometry import invert, transform_points
 from perception.representations import BALL_SIGHTINGS
 from perception.types import BallSighting
@@ -116,14 +117,9 @@ def summary(counts: np.ndarray) -> list[dict[str, Any]]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--env", default="SPL/Goalie-v0")
-    parser.add_argument("--player", default="goalie")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--episodes", type=int, default=16)
-    parser.add_argument("--name", default="ball_detection_near_robots")
-    add_overrides_argument(parser)
-    parser.add_argument("--out", type=Path, default=RESULTS)
+    parser = episodes_parser(
+        __doc__, "ball_detection_near_robots", env="SPL/Goalie-v0", player="goalie"
+    )
     args = parser.parse_args()
     torch.set_num_threads(1)
     start = time.perf_counter()

@@ -116,14 +116,27 @@ def summary(values: list[float | None], floor: float | None) -> dict[str, Any]:
     }
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--env", default="SPL/Striker-v0")
+def episodes_parser(
+    doc: str, name: str, env: str = "SPL/Striker-v0", player: str | None = None
+) -> argparse.ArgumentParser:
+    """The command line of the ball benchmarks that play episodes (``doc``'s first line their
+    description): ``--env`` (``env``), ``--player`` where the script takes one (``player``
+    its default), ``--seed`` 0, ``--episodes`` 16, ``--name`` (``name``), the env overrides
+    and ``--out`` (``benchmarks/results``)."""
+    parser = argparse.ArgumentParser(description=doc.split("\n")[0])
+    parser.add_argument("--env", default=env)
+    if player is not None:
+        parser.add_argument("--player", default=player)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--episodes", type=int, default=16)
-    parser.add_argument("--name", default="ball_flatness")
+    parser.add_argument("--name", default=name)
     add_overrides_argument(parser)
     parser.add_argument("--out", type=Path, default=RESULTS)
+    return parser
+
+
+def main() -> None:
+    parser = episodes_parser(__doc__, "ball_flatness")
     args = parser.parse_args()
     torch.set_num_threads(1)
     start = time.perf_counter()

@@ -34,10 +34,14 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import torch
-from ball_flatness import camera_frames, camera_sightings  # benchmarks/ is the script's folder
+from ball_flatness import (
+    camera_frames,
+    camera_sightings,
+    episodes_parser,
+)  # benchmarks/ is the script's folder
 
 import spl_env  # noqa: F401  (registers the env ids)
-from agents.evaluate import add_overrides_argument, load_policy, parse_overrides, played_steps
+from agents.evaluate import load_policy, parse_overrides, played_steps
 from perception.geometry import invert, transform_points
 from perception.types import CameraModel, CameraState
 from perception.vision.cnn_ball import CnnBallConfig
@@ -150,14 +154,8 @@ def band_summary(rows: list[dict[str, Any]], tilt: float) -> dict[str, Any]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--env", default="SPL/Striker-v0")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--episodes", type=int, default=16)
+    parser = episodes_parser(__doc__, "ball_sighting_noise")
     parser.add_argument("--max-range", type=float, default=5.0, help="the fit's sightings (m)")
-    parser.add_argument("--name", default="ball_sighting_noise")
-    add_overrides_argument(parser)
-    parser.add_argument("--out", type=Path, default=RESULTS)
     args = parser.parse_args()
     torch.set_num_threads(1)
     start = time.perf_counter()

@@ -415,8 +415,6 @@ class BallFilter:
             raise ValueError(f"time_s must not go back: {time_s} after {self._time_s}")
         odometry = finite_vector(odometry, "odometry", 3)
         checked = checked_sightings(sightings, BallSighting)
-        for i, sighting in enumerate(sightings):
-            check_finite(f"sightings[{i}]", "score", sighting.score)
         best_score = max((float(sighting.score) for sighting in sightings), default=0.0)
         pose, pose_cov = checked_self_pose(self_pose)
         if in_view is not None and not callable(in_view):

@@ -14,8 +14,8 @@ from perception.validation import check_covariance, check_finite, check_positive
 def checked_sightings(
     sightings: object, kind: type[RobotSighting] | type[BallSighting]
 ) -> list[tuple[float, float, FloatArray]]:
-    """Check ``sightings``, a sequence of ``kind``; return each one's ``(range_m > 0,
-    bearing_rad, cov (2, 2) positive definite)``."""
+    """Check ``sightings``, a sequence of ``kind`` (each with a finite ``score``); return each
+    one's ``(range_m > 0, bearing_rad, cov (2, 2) positive definite)``."""
     if isinstance(sightings, (kind, str, bytes)) or not isinstance(sightings, Sequence):
         raise TypeError(
             f"sightings must be a sequence of {kind.__name__}, got {type(sightings).__name__}"
@@ -27,6 +27,7 @@ def checked_sightings(
             raise TypeError(f"{name} must be a {kind.__name__}, got {type(sighting).__name__}")
         check_positive(name, "range_m", sighting.range_m)
         check_finite(name, "bearing_rad", sighting.bearing_rad)
+        check_finite(name, "score", sighting.score)
         cov = check_covariance(sighting.cov, f"{name}.cov", 2)
         checked.append((float(sighting.range_m), float(sighting.bearing_rad), cov))
     return checked

@@ -531,8 +531,10 @@ def test_a_sighting_scored_start_at_once_score_or_more_starts_a_belief_at_once(
     score: float, at_once: bool
 ) -> None:
     """With ``start_at_once_score`` 0.7, a sighting at (2, 0) scored 0.7 or more starts the
-    belief there at once, as the first sighting did without the confirmed start; one scored
-    less waits for a second (shown as the candidate)."""
+    belief there at once, as the first sighting did without the confirmed start: at rest, the
+    position's covariance the sighting's ``J cov Jᵀ`` (by hand, bearing 0: diag(σ_r², r² σ_b²)),
+    the velocity's ``initial_velocity_std_mps``² I; one scored less waits for a second (shown
+    as the candidate)."""
     pose = [0.0, 0.0, 0.0]
     config = dataclasses.replace(CONFIRMED, start_at_once_score=0.7)
     seen = dataclasses.replace(observe(pose, [2.0, 0.0]), score=score)
@@ -540,7 +542,12 @@ def test_a_sighting_scored_start_at_once_score_or_more_starts_a_belief_at_once(
     first = BallFilter(EXACT_FIRST).update(0.0, [seen], STILL, self_pose(pose))
     assert estimate.known == at_once and (estimate.candidate is None) == at_once
     if at_once:
-        np.testing.assert_array_equal(estimate.relative, first.relative)
+        np.testing.assert_allclose(estimate.relative, [2.0, 0.0, 0.0, 0.0], atol=1e-12)
+        J = polar_jacobian(0.0, 2.0, 0.0)
+        np.testing.assert_allclose(estimate.relative_cov[:2, :2], J @ COV @ J.T, atol=1e-15)
+        np.testing.assert_allclose(
+            estimate.relative_cov[2:, 2:], config.initial_velocity_std_mps**2 * np.eye(2)
+        )
         np.testing.assert_array_equal(estimate.relative_cov, first.relative_cov)
 
 

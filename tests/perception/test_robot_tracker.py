@@ -4,6 +4,7 @@ Monte Carlo of it), simulated constant-velocity targets, and chi-square consiste
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 
@@ -483,6 +484,14 @@ def _bad_updates() -> list[tuple[str, object, object, object, type[Exception], s
             (POSE0, EXACT),
             ValueError,
             r"sightings\[0\].bearing_rad",
+        ),
+        (
+            "nan score",
+            2.0,
+            [dataclasses.replace(robot_sighting(1.0, 0.0), score=math.nan)],
+            (POSE0, EXACT),
+            ValueError,
+            r"sightings\[0\].score",
         ),
         (
             "singular cov",
