@@ -126,7 +126,13 @@ from perception.tracking.ball_filter import BallFilterConfig
 from perception.tracking.robot_tracker import RobotTrackerConfig
 from perception.tracking.sonar_filter import SonarFilterConfig
 from perception.types import SensorFrame
-from perception.validation import check_choice, check_finite, check_in_interval, check_instance
+from perception.validation import (
+    check_choice,
+    check_finite,
+    check_in_interval,
+    check_instance,
+    check_nested_configs,
+)
 from perception.vision.cnn_ball import CnnBallConfig
 from perception.vision.cnn_detector import CnnDetectorConfig
 from perception.vision.cnn_robots import CnnRobotConfig
@@ -300,6 +306,7 @@ class PipelineConfig:
     ball_filter: BallFilterConfig = field(default_factory=BallFilterConfig)
 
     def __post_init__(self) -> None:
+        check_nested_configs(self)
         for representation in PROVIDERS:
             if hasattr(self, representation):
                 check_choice(

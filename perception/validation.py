@@ -14,7 +14,10 @@ return the value as a new float64 array.
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import types
+import typing
 from collections.abc import Sequence
 
 import numpy as np
@@ -143,6 +146,35 @@ def check_instance(name: str, value: object, expected: type, *, optional: bool =
     if not (isinstance(value, expected) or (optional and value is None)):
         wanted = expected.__name__ + (" or None" if optional else "")
         raise InvalidTypeError(f"{name} must be a {wanted}, got {type(value).__name__}")
+
+
+def check_nested_configs(config: object) -> None:
+    """InvalidTypeError unless every field of the dataclass ``config`` whose declared type is a
+    dataclass (a nested config: ``sensors: RigConfig``, ``laser: LaserConfig | None``) holds an
+    instance of that class (or None where the type allows it): ``EnvConfig.robot=None`` fails
+    here, by name, and not as an AttributeError when the env is built."""
+    owner = type(config).__name__
+    hints = typing.get_type_hints(type(config))
+    for f in dataclasses.fields(config):  # type: ignore[arg-type]
+        expected, optional = _nested_config_type(hints[f.name])
+        if expected is not None:
+            check_instance(
+                f"{owner}.{f.name}", getattr(config, f.name), expected, optional=optional
+            )
+
+
+def _nested_config_type(hint: object) -> tuple[type | None, bool]:
+    """The dataclass a field's type ``hint`` names, and whether None is allowed too; (None,
+    False) for any other type."""
+    if isinstance(hint, type) and dataclasses.is_dataclass(hint):
+        return hint, False
+    if isinstance(hint, types.UnionType) or typing.get_origin(hint) is typing.Union:
+        members = typing.get_args(hint)
+        classes = [m for m in members if m is not type(None)]
+        if len(classes) == 1 and len(members) == 2:
+            expected, _ = _nested_config_type(classes[0])
+            return expected, expected is not None
+    return None, False
 
 
 def check_generator(name: str, value: object) -> None:

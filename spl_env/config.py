@@ -11,11 +11,10 @@ top-level name (``control_dt_s=0.2``) or by one of the env's aliases (:data:`SPL
 from __future__ import annotations
 
 import math
-import typing
 from dataclasses import dataclass, field
 
 from perception.pipeline import POLE_MAPPING_POSES, PipelineConfig
-from perception.validation import check_choice, check_int
+from perception.validation import check_bool, check_choice, check_int, check_nested_configs
 from spl_env.robots.nao import RobotConfig
 from spl_env.scenes.spl_field import SceneConfig
 from spl_env.sensors.rig import RigConfig
@@ -62,6 +61,7 @@ class CoreConfig:
     info_timing: bool = False
 
     def __post_init__(self) -> None:
+        check_nested_configs(self)
         if not (0 < self.physics_dt_s <= min(self.control_dt_s, 0.1)) or not (
             self.control_dt_s <= 1.0
         ):
@@ -82,12 +82,7 @@ class CoreConfig:
                 f"steps of {self.control_dt_s} s, got {self.task.episode_s}"
             )
         check_choice(type(self).__name__, "info_level", self.info_level, INFO_LEVELS)
-        task_class = typing.get_type_hints(type(self))["task"]
-        if not isinstance(self.task, task_class):
-            raise TypeError(
-                f"{type(self).__name__}.task must be a {task_class.__name__}, "
-                f"got {type(self.task).__name__}"
-            )
+        check_bool(type(self).__name__, "info_timing", self.info_timing)
 
     @property
     def substeps(self) -> int:

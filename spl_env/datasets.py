@@ -40,6 +40,7 @@ from numpy.typing import NDArray
 
 from perception.geometry import FloatArray, project_points, range_bearing
 from perception.types import PoleCode
+from perception.validation import check_nested_configs
 from perception.vision.cnn_detector import OBJECT_CLASSES, pole_class_name
 from spl_env.robots.nao import NaoRobot, RobotConfig
 from spl_env.scenes.spl_field import SceneConfig, SplFieldScene
@@ -69,6 +70,7 @@ class DatasetConfig:
     lighting: LightingRandomisation = field(default_factory=LightingRandomisation)
 
     def __post_init__(self) -> None:
+        check_nested_configs(self)
         for name in (
             "aim_probability",
             "occluder_probability",

@@ -15,6 +15,7 @@ import numpy as np
 from perception.field.dimensions import FieldDimensions
 from perception.geometry import FloatArray
 from perception.types import PoleCode, PoleGeometry
+from perception.validation import check_nested_configs
 
 __all__ = ["FieldDimensions", "PoleLayout"]
 
@@ -33,6 +34,7 @@ class PoleLayout:
     geometry: PoleGeometry = field(default_factory=PoleGeometry)
 
     def __post_init__(self) -> None:
+        check_nested_configs(self)
         if len(self.x_positions_m) != 3:
             raise ValueError(
                 f"PoleLayout.x_positions_m must hold 3 values, got {len(self.x_positions_m)}"

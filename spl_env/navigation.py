@@ -33,6 +33,7 @@ from perception.validation import (
     InvalidTypeError,
     check_finite,
     check_int,
+    check_nested_configs,
     check_positive,
     finite_points,
     finite_vector,
@@ -218,13 +219,8 @@ class HybridConfig:
     front_sonars: tuple[int, ...] = (1, 2, 3, 4, 5, 6)  # ring indices, the Pioneer's front sweep
 
     def __post_init__(self) -> None:
+        check_nested_configs(self)
         owner = "HybridConfig"
-        for name, kind in (("waypoint", WaypointConfig), ("braitenberg", BraitenbergConfig)):
-            value = getattr(self, name)
-            if not isinstance(value, kind):
-                raise InvalidTypeError(
-                    f"{owner}.{name} must be a {kind.__name__}, got {type(value).__name__}"
-                )
         if not isinstance(self.front_sonars, tuple) or not self.front_sonars:
             raise InvalidTypeError(
                 f"{owner}.front_sonars must be a non-empty tuple of sonar indices, "

@@ -55,6 +55,7 @@ from perception.validation import (
     check_finite,
     check_instance,
     check_int,
+    check_nested_configs,
     check_positive,
     check_probability,
     finite_vector,
@@ -91,11 +92,7 @@ class CircleMapConfig:
     max_circles: int = 64
 
     def __post_init__(self) -> None:
-        if not isinstance(self.segmentation, BreakpointConfig):
-            raise TypeError(
-                f"{_OWNER}.segmentation must be a BreakpointConfig, "
-                f"got {type(self.segmentation).__name__}"
-            )
+        check_nested_configs(self)
         check_positive(_OWNER, "range_sigma_m", self.range_sigma_m)
         check_positive(_OWNER, "max_radius_m", self.max_radius_m)
         check_positive(_OWNER, "min_radius_m", self.min_radius_m, upper=self.max_radius_m)

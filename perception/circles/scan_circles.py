@@ -26,7 +26,11 @@ from perception.circles.fits import angles_around_centre, kcr_covariance
 from perception.circles.segmentation import BreakpointConfig, Segment, segment_breakpoints
 from perception.geometry import FloatArray
 from perception.slam.circle_observations import ArcObservation, CircleObservation
-from perception.validation import InvalidTypeError, check_finite, check_positive
+from perception.validation import (
+    check_finite,
+    check_nested_configs,
+    check_positive,
+)
 
 
 def stands_clear(segment: Segment, ranges: FloatArray, jump_m: float) -> bool:
@@ -59,16 +63,7 @@ class ScanCirclesConfig:
     covariance_scale: float = 4.0
 
     def __post_init__(self) -> None:
-        for name, kind in (
-            ("segmentation", BreakpointConfig),
-            ("classification", ClassificationConfig),
-        ):
-            value = getattr(self, name)
-            if not isinstance(value, kind):
-                raise InvalidTypeError(
-                    f"ScanCirclesConfig.{name} must be a {kind.__name__}, "
-                    f"got {type(value).__name__}"
-                )
+        check_nested_configs(self)
         check_positive("ScanCirclesConfig", "covariance_scale", self.covariance_scale)
 
 

@@ -47,6 +47,7 @@ from perception.types import CameraModel, CameraState
 from perception.validation import (
     InvalidTypeError,
     check_in_interval,
+    check_nested_configs,
     check_positive,
     finite_vector,
 )
@@ -249,11 +250,8 @@ class FeatureViewConfig:
     detector: DetectorModel = field(default_factory=DetectorModel)
 
     def __post_init__(self) -> None:
+        check_nested_configs(self)
         owner = "FeatureViewConfig"
-        if not isinstance(self.detector, DetectorModel):
-            raise InvalidTypeError(
-                f"{owner}.detector must be a DetectorModel, got {type(self.detector).__name__}"
-            )
         for name in (
             "max_range_m",
             "min_line_m",

@@ -39,7 +39,13 @@ from numpy.typing import ArrayLike, NDArray
 from perception.geometry import FloatArray
 from perception.landmarks.matching import LineModel, Matches, RansacConfig, ransac_line
 from perception.landmarks.vocabulary import Vocabulary
-from perception.validation import InvalidTypeError, check_generator, check_in_interval, check_int
+from perception.validation import (
+    InvalidTypeError,
+    check_generator,
+    check_in_interval,
+    check_int,
+    check_nested_configs,
+)
 
 IntArray = NDArray[np.int64]
 
@@ -58,14 +64,11 @@ class RetrievalConfig:
     max_results: int = 10  # hits returned, best cosine first
 
     def __post_init__(self) -> None:
+        check_nested_configs(self)
         check_in_interval(
             "RetrievalConfig", "min_cosine", self.min_cosine, 0.0, 1.0, high_inclusive=True
         )
         check_int("RetrievalConfig", "min_inliers", self.min_inliers, 2)
-        if not isinstance(self.ransac, RansacConfig):
-            raise InvalidTypeError(
-                f"RetrievalConfig.ransac must be a RansacConfig, got {type(self.ransac).__name__}"
-            )
         if self.min_inliers < self.ransac.min_inliers:
             raise ValueError(
                 f"RetrievalConfig.min_inliers must be >= ransac.min_inliers "

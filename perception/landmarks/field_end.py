@@ -56,6 +56,7 @@ from perception.validation import (
     check_generator,
     check_in_interval,
     check_int,
+    check_nested_configs,
     check_positive,
 )
 
@@ -93,6 +94,7 @@ class FieldEndConfig:
     retrieval: RetrievalConfig = field(default_factory=RetrievalConfig)
 
     def __post_init__(self) -> None:
+        check_nested_configs(self)
         check_int("FieldEndConfig", "max_size", self.max_size, 1)
         check_int("FieldEndConfig", "max_per_goal", self.max_per_goal, 1)
         check_int("FieldEndConfig", "min_response", self.min_response, 1)
@@ -100,11 +102,6 @@ class FieldEndConfig:
         check_bool("FieldEndConfig", "balance_votes", self.balance_votes)
         check_int("FieldEndConfig", "window", self.window, 1)
         check_in_interval("FieldEndConfig", "confidence", self.confidence, 0.5, 1.0)
-        if not isinstance(self.retrieval, RetrievalConfig):
-            raise InvalidTypeError(
-                "FieldEndConfig.retrieval must be a RetrievalConfig, "
-                f"got {type(self.retrieval).__name__}"
-            )
 
 
 @dataclass(frozen=True)

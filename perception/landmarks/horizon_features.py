@@ -21,6 +21,7 @@ from perception.geometry import FloatArray, camera_rotation, pixel_rays
 from perception.landmarks.horizon import HorizonConfig, horizon_band
 from perception.landmarks.surf1d import Surf1dConfig, Surf1dFeatures, extract_features
 from perception.types import CameraModel, CameraState
+from perception.validation import check_nested_configs
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -29,6 +30,9 @@ class HorizonFeatureConfig:
 
     horizon: HorizonConfig = field(default_factory=HorizonConfig)
     surf: Surf1dConfig = field(default_factory=Surf1dConfig)
+
+    def __post_init__(self) -> None:
+        check_nested_configs(self)
 
 
 @dataclass(frozen=True, eq=False)

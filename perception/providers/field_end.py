@@ -59,7 +59,7 @@ from perception.representations import (
     Prior,
 )
 from perception.types import TrackedPoseEstimate
-from perception.validation import check_bool, check_int, check_positive
+from perception.validation import check_bool, check_int, check_nested_configs, check_positive
 
 ENDS, SIDES = 0, 1  # the field axis across a board: x for the end boards, y for the side ones
 # the field headings (rad) facing the +1 and the -1 board of each axis
@@ -121,6 +121,7 @@ class FieldEndProviderConfig:
     side_boards: bool = True  # the seed's: False (goal areas only) (c)
 
     def __post_init__(self) -> None:
+        check_nested_configs(self)
         check_bool("FieldEndProviderConfig", "walk_on_needs_post", self.walk_on_needs_post)
         check_bool("FieldEndProviderConfig", "learn_in_play", self.learn_in_play)
         check_bool("FieldEndProviderConfig", "side_boards", self.side_boards)

@@ -30,7 +30,7 @@ from perception.landmarks.visual_odometry import (
 from perception.providers.base import PerceptionContext, Provider
 from perception.representations import HORIZON_FEATURES, ODOMETRY, ROBOT_SIGHTINGS, Prior
 from perception.types import CameraModel, OdometryStep, RobotSighting
-from perception.validation import finite_vector
+from perception.validation import check_nested_configs, finite_vector
 
 
 class HorizonFeatureProvider(Provider):
@@ -66,6 +66,9 @@ class VisualOdometryProviderConfig:
 
     odometry: VisualOdometryConfig = field(default_factory=VisualOdometryConfig)
     matching: MatchingConfig = field(default_factory=MatchingConfig)
+
+    def __post_init__(self) -> None:
+        check_nested_configs(self)
 
 
 class VisualOdometry(Provider):

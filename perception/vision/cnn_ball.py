@@ -48,9 +48,9 @@ from numpy.typing import NDArray
 from perception.geometry import FloatArray
 from perception.types import BallSighting, CameraModel, CameraState
 from perception.validation import (
-    InvalidTypeError,
     check_in_interval,
     check_int,
+    check_nested_configs,
     check_positive,
     check_probability,
     check_rgb_image,
@@ -119,6 +119,7 @@ class CnnBallConfig:
     clipped_luminance: float = 250.0
 
     def __post_init__(self) -> None:
+        check_nested_configs(self)
         check_probability(_OWNER, "score_threshold", self.score_threshold, float_only=True)
         check_positive(_OWNER, "radius_m", self.radius_m)
         check_positive(_OWNER, "border_margin_px", self.border_margin_px, allow_zero=True)
@@ -134,10 +135,6 @@ class CnnBallConfig:
         check_positive(
             _OWNER, "clipped_luminance", self.clipped_luminance, upper=255.0, upper_inclusive=True
         )
-        if self.body is not None and not isinstance(self.body, BodyContourConfig):
-            raise InvalidTypeError(
-                f"{_OWNER}.body must be a BodyContourConfig or None, got {type(self.body).__name__}"
-            )
 
     def pixel_std(self, box: FloatArray, downscale: int = 1) -> float:
         """Std (px) of the centre of a box (4,) ``(u0, v0, u1, v1)`` found in the image read at

@@ -56,7 +56,13 @@ from perception.types import (
     PoleGeometry,
     pole_ids_by_colours,
 )
-from perception.validation import check_bool, check_int, check_probability, check_rgb_image
+from perception.validation import (
+    check_bool,
+    check_int,
+    check_nested_configs,
+    check_probability,
+    check_rgb_image,
+)
 from perception.vision.colour_filter import ColourFilterConfig
 from perception.vision.pole_colours import band_colours, colours_contradict, paint_hues
 from perception.vision.pole_edges import (
@@ -125,6 +131,7 @@ class CnnDetectorConfig:
     require_both_colours: bool = False
 
     def __post_init__(self) -> None:
+        check_nested_configs(self)
         if not isinstance(self.weights, Path):
             raise TypeError(
                 f"CnnDetectorConfig.weights must be a pathlib.Path, got {type(self.weights)}"
@@ -135,11 +142,6 @@ class CnnDetectorConfig:
         check_int("CnnDetectorConfig", "max_detections", self.max_detections, 1)
         for name in ("check_colours", "require_both_colours"):
             check_bool("CnnDetectorConfig", name, getattr(self, name))
-        if not (self.edges is None or isinstance(self.edges, PoleEdgeConfig)):
-            raise TypeError(
-                "CnnDetectorConfig.edges must be a PoleEdgeConfig or None, "
-                f"got {type(self.edges).__name__}"
-            )
 
 
 @dataclass(frozen=True)
@@ -200,6 +202,7 @@ class PoleRangeModel:
     bearing_std_px: float
 
     def __post_init__(self) -> None:
+        check_nested_configs(self)
         for name in ("laws", "rel_var"):
             if set(getattr(self, name)) != set(BRANCHES):
                 raise ValueError(

@@ -16,7 +16,7 @@ from perception.providers.base import PerceptionContext
 from perception.representations import CIRCLE_MAP, ODOMETRY_POSE, SELF_POSE
 from perception.slam.circle_slam import CircleSlamConfig
 from perception.types import PoleGeometry, SensorFrame
-from perception.validation import InvalidTypeError, check_int
+from perception.validation import check_int
 from spl_env.config import CoreConfig
 from spl_env.envs.core import RobotEnv
 from spl_env.envs.info import InfoLayout
@@ -79,10 +79,6 @@ class CirclesConfig(CoreConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if not isinstance(self.layout, RoomLayout):
-            raise InvalidTypeError(
-                f"CirclesConfig.layout must be a RoomLayout, got {type(self.layout).__name__}"
-            )
         check_int("CirclesConfig", "observed_circles", self.observed_circles, 1)
         check_int("CirclesConfig", "scan_bins", self.scan_bins, 1)
         if self.sensors.laser.n_beams % self.scan_bins:

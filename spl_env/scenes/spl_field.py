@@ -18,7 +18,14 @@ import numpy as np
 
 from perception.geometry import FloatArray
 from perception.types import PoleCode, PoleGeometry
-from perception.validation import check_choice, check_in_interval, check_int, check_positive
+from perception.validation import (
+    check_bool,
+    check_choice,
+    check_in_interval,
+    check_int,
+    check_nested_configs,
+    check_positive,
+)
 from spl_env.field import FieldDimensions, PoleLayout
 from spl_env.scenes.spectators import Spectators
 from spl_env.sim.world import BulletWorld, TriangleMesh, VisualPart
@@ -71,7 +78,10 @@ class SceneConfig:
     line_piece_m: float = 0.5
 
     def __post_init__(self) -> None:
+        check_nested_configs(self)
         owner = "SceneConfig"
+        check_bool(owner, "poles_enabled", self.poles_enabled)
+        check_bool(owner, "boards_enabled", self.boards_enabled)
         for name in ("board_distance_m", "board_height_m", "board_panel_width_m", "ball_mass_kg"):
             check_positive(owner, name, getattr(self, name))
         check_in_interval(

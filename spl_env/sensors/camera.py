@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from perception.geometry import FloatArray
 from perception.types import CameraModel
+from perception.validation import check_bool, check_nested_configs, check_positive
 from spl_env.sim.world import BulletWorld, Lighting
 
 
@@ -64,18 +65,17 @@ class CameraConfig:
     randomisation: LightingRandomisation = field(default_factory=LightingRandomisation)
 
     def __post_init__(self) -> None:
-        if not (0 < self.near_m < self.far_m) or not math.isfinite(self.far_m):
+        check_nested_configs(self)
+        owner = "CameraConfig"
+        check_positive(owner, "near_m", self.near_m)
+        check_positive(owner, "far_m", self.far_m)
+        if not self.near_m < self.far_m:
             raise ValueError(
                 f"CameraConfig needs 0 < near_m < far_m, got {self.near_m}, {self.far_m}"
             )
-        if not (math.isfinite(self.noise_std) and self.noise_std >= 0):
-            raise ValueError(
-                f"CameraConfig.noise_std must be finite and >= 0, got {self.noise_std}"
-            )
-        if not (math.isfinite(self.exposure_time_s) and self.exposure_time_s >= 0):
-            raise ValueError(
-                f"CameraConfig.exposure_time_s must be finite and >= 0, got {self.exposure_time_s}"
-            )
+        check_positive(owner, "noise_std", self.noise_std, allow_zero=True)
+        check_positive(owner, "exposure_time_s", self.exposure_time_s, allow_zero=True)
+        check_bool(owner, "randomise_lighting", self.randomise_lighting)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -18,7 +18,7 @@ import numpy as np
 
 from perception.geometry import FloatArray
 from perception.types import GroundTruth, SensorFrame
-from perception.validation import InvalidTypeError
+from perception.validation import check_nested_configs
 from spl_env.robots.diff_drive import DiffDriveRobot, WheelEncoders, dead_reckoning_increment
 from spl_env.sensors.laser import Laser, LaserConfig
 from spl_env.sensors.ring_sonar import RingSonar, RingSonarConfig
@@ -35,10 +35,7 @@ class DiffDriveRigConfig:
     sonar_ring: RingSonarConfig | None = field(default_factory=RingSonarConfig)
 
     def __post_init__(self) -> None:
-        if not isinstance(self.laser, LaserConfig):
-            raise InvalidTypeError(
-                f"DiffDriveRigConfig.laser must be a LaserConfig, got {type(self.laser).__name__}"
-            )
+        check_nested_configs(self)
 
 
 class DiffDriveRig:

@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 
 from perception.geometry import FloatArray
 from perception.types import CameraState, GroundTruth, SensorFrame
+from perception.validation import check_nested_configs
 from spl_env.robots.nao import NaoRobot, camera_state_for
 from spl_env.sensors.camera import Camera, CameraConfig, EpisodeLighting, blur_length_px
 from spl_env.sensors.emulation.ball import CNN_BALL, CNN_BALL_BOTTOM, GeometricBallConfig
@@ -55,6 +56,7 @@ class RigConfig:
     laser: LaserConfig | None = None
 
     def __post_init__(self) -> None:
+        check_nested_configs(self)
         if self.camera_mode not in CAMERA_MODES:
             raise ValueError(
                 f"RigConfig.camera_mode must be one of {CAMERA_MODES}, got {self.camera_mode!r}"

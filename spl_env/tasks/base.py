@@ -17,7 +17,7 @@ from gymnasium import spaces
 
 from perception.geometry import FloatArray
 from perception.representations import PerceptionOutput
-from perception.validation import check_int
+from perception.validation import check_int, check_nested_configs
 from spl_env.behaviours import WalkerConfig, WanderingRobots
 from spl_env.field import FieldDimensions
 from spl_env.observations.base import ObservationEncoder
@@ -38,6 +38,7 @@ class TaskConfig(EpisodeConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
+        check_nested_configs(self)
         check_int("TaskConfig", "n_other_robots", self.n_other_robots)
         if not 0 <= self.n_other_robots <= MAX_OTHER_ROBOTS:
             raise ValueError(

@@ -3,6 +3,7 @@ believes."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -23,6 +24,9 @@ from spl_env.tasks.soccer import (
 )
 from spl_env.tasks.soccer_skills import approach_and_kick
 from spl_env.world_state import WorldState
+
+SHOT_ANGLE_MAX_RAD = 0.9  # the ball lies up to this far off the goal's axis, seen from its centre
+KICKER_BEHIND_M = (0.5, 1.0)  # the kicker starts this far behind the ball (m)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -66,6 +70,15 @@ class GoalieTask(SoccerTask):
 
     def __init__(self, config: GoalieTaskConfig, context: TaskContext) -> None:
         super().__init__(config, context)
+        farthest = config.shot_distance_m[1]
+        half_width = context.dimensions.half_width_m
+        if farthest * math.sin(SHOT_ANGLE_MAX_RAD) > half_width:
+            raise ValueError(
+                f"{type(config).__name__}.shot_distance_m must keep the ball inside the touch "
+                f"lines at {math.degrees(SHOT_ANGLE_MAX_RAD):.0f} degrees off the goal's axis: "
+                f"high <= {half_width / math.sin(SHOT_ANGLE_MAX_RAD):.2f} m, got "
+                f"{config.shot_distance_m}"
+            )
         self._target = np.zeros(2)
         self._shot = ShotWatch(config)
 
@@ -78,10 +91,10 @@ class GoalieTask(SoccerTask):
         self, rng: np.random.Generator, others: Sequence[NaoRobot], placed: list[NaoRobot]
     ) -> FloatArray:
         dims = self.context.dimensions
-        angle = rng.uniform(-0.9, 0.9)
+        angle = rng.uniform(-SHOT_ANGLE_MAX_RAD, SHOT_ANGLE_MAX_RAD)
         distance = rng.uniform(*self.config.shot_distance_m)
         ball = goal_centre(dims, -1) + distance * np.array([np.cos(angle), np.sin(angle)])
-        behind = rng.uniform(0.5, 1.0)
+        behind = rng.uniform(*KICKER_BEHIND_M)
         kicker, rest = others[0], others[1:]
         kicker.place(
             np.array([*(ball + behind * np.array([np.cos(angle), np.sin(angle)])), angle + np.pi])

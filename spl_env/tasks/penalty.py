@@ -46,6 +46,22 @@ class PenaltyTask(StrikerTask):
 
     def __init__(self, config: PenaltyTaskConfig, context: TaskContext) -> None:
         super().__init__(config, context)
+        owner, dims = type(config).__name__, context.dimensions
+        check_positive(
+            owner,
+            "start_behind_ball_m",
+            config.start_behind_ball_m,
+            upper=dims.length_m - dims.penalty_mark_distance_m,  # from our goal line
+            upper_inclusive=True,
+        )
+        check_positive(
+            owner,
+            "goalie_max_offset_m",
+            config.goalie_max_offset_m,
+            allow_zero=True,
+            upper=dims.goal_inner_width_m / 2,  # the goalie stands in its goal
+            upper_inclusive=True,
+        )
         self._shot = ShotWatch(config)
 
     def penalty_mark(self) -> FloatArray:

@@ -40,7 +40,13 @@ from gymnasium import spaces
 from perception.geometry import FloatArray
 from perception.representations import BALL, PerceptionOutput
 from perception.types import BallEstimate
-from perception.validation import check_choice, check_int, check_positive
+from perception.validation import (
+    check_choice,
+    check_finite,
+    check_in_interval,
+    check_int,
+    check_positive,
+)
 from spl_env.field import FieldDimensions
 from spl_env.observations.ball import BallEncoder
 from spl_env.observations.base import ObservationEncoder
@@ -107,8 +113,7 @@ class SoccerTaskConfig(TaskConfig):
                 f"{owner}.glance_s must be <= glance_period_s, got {self.glance_s} and "
                 f"{self.glance_period_s}"
             )
-        if not math.isfinite(self.scan_pitch_rad):
-            raise ValueError(f"{owner}.scan_pitch_rad must be finite, got {self.scan_pitch_rad}")
+        check_finite(owner, "scan_pitch_rad", self.scan_pitch_rad)  # the head's joints: the task
         check_int(owner, "max_tracked_robots", self.max_tracked_robots, 1)
         check_positive(owner, "goal_reward", self.goal_reward, allow_zero=True)
         for name in ("kicked_speed_mps", "stopped_speed_mps"):
@@ -123,6 +128,26 @@ class SoccerTaskConfig(TaskConfig):
     def other_robot_teams(self) -> tuple[int, ...]:
         """Every scripted robot plays for the other team (1)."""
         return (1,) * self.n_other_robots
+
+
+def check_head_reach(config: SoccerTaskConfig, robot: RobotConfig) -> None:
+    """ValueError, naming the field, unless the scripted head's scan and glance stay within
+    ``robot``'s head joints (a target beyond a joint would be clipped to it: a sine scan with a
+    too wide amplitude turns into a square wave)."""
+    owner = type(config).__name__
+    for name in ("scan_amplitude_rad", "glance_amplitude_rad"):
+        check_positive(
+            owner, name, getattr(config, name), upper=robot.head_yaw_limit_rad, upper_inclusive=True
+        )
+    check_in_interval(
+        owner,
+        "scan_pitch_rad",
+        config.scan_pitch_rad,
+        robot.head_pitch_min_rad,
+        robot.head_pitch_max_rad,
+        low_inclusive=True,
+        high_inclusive=True,
+    )
 
 
 def ball_in_goal(ball: FloatArray, dims: FieldDimensions) -> int:
@@ -244,6 +269,7 @@ class SoccerTask(Task):
 
     def __init__(self, config: SoccerTaskConfig, context: TaskContext) -> None:
         super().__init__(config, context)
+        check_head_reach(config, context.robot)
         self._belief: PerceptionOutput | None = None
 
     @property

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import dataclass, field
 
 import numpy as np
 import pytest
@@ -19,6 +20,7 @@ from perception.validation import (
     check_generator,
     check_in_interval,
     check_int,
+    check_nested_configs,
     check_positive,
     check_probability,
     check_rgb_image,
@@ -294,3 +296,27 @@ def test_check_rgb_image_accepts_the_frame_and_names_what_came() -> None:
             ValueError, match=r"frame must be a \(4, 6, 3\) uint8 RGB array, " + got
         ):
             check_rgb_image(image, 4, 6, "frame")
+
+
+@dataclass(frozen=True)
+class _Inner:
+    size: float = 1.0
+
+
+@dataclass(frozen=True)
+class _Outer:
+    inner: _Inner = field(default_factory=_Inner)
+    maybe: _Inner | None = None
+    label: str = "x"  # not a config: left alone
+
+
+def test_nested_configs_must_be_of_their_declared_class() -> None:
+    check_nested_configs(_Outer())
+    check_nested_configs(_Outer(maybe=_Inner()))
+    check_nested_configs(_Outer(label=None))  # type: ignore[arg-type]
+    with pytest.raises(InvalidTypeError, match=r"^_Outer\.inner must be a _Inner, got NoneType$"):
+        check_nested_configs(_Outer(inner=None))  # type: ignore[arg-type]
+    with pytest.raises(
+        InvalidTypeError, match=r"^_Outer\.maybe must be a _Inner or None, got str$"
+    ):
+        check_nested_configs(_Outer(maybe="bogus"))  # type: ignore[arg-type]

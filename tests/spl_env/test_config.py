@@ -339,6 +339,32 @@ def test_env_config_validates_when_built_directly() -> None:
     assert geometric.max_steps == 30 and geometric.substeps == 10
 
 
+@pytest.mark.parametrize(
+    ("build", "match"),
+    [
+        (lambda: EnvConfig(robot=None), r"EnvConfig\.robot must be a RobotConfig, got NoneType"),
+        (lambda: EnvConfig(task=None), r"EnvConfig\.task must be a TaskConfig, got NoneType"),
+        (
+            lambda: EnvConfig(perception=PipelineConfig(slam=None)),
+            r"PipelineConfig\.slam must be a EkfSlamConfig, got NoneType",
+        ),
+        (
+            lambda: RigConfig(geometric_camera="bogus"),
+            r"RigConfig\.geometric_camera must be a GeometricCameraConfig, got str",
+        ),
+        (lambda: RigConfig(laser="fine"), r"RigConfig\.laser must be a LaserConfig or None"),
+        (lambda: SceneConfig(poles_enabled="False"), r"SceneConfig\.poles_enabled must be a bool"),
+        (lambda: SceneConfig(boards_enabled=1), r"SceneConfig\.boards_enabled must be a bool"),
+        (lambda: EnvConfig(info_timing="yes"), r"EnvConfig\.info_timing must be a bool"),
+    ],
+)
+def test_nested_configs_and_flags_of_the_wrong_type_are_refused_by_name(
+    build: Any, match: str
+) -> None:
+    with pytest.raises(TypeError, match=match):
+        build()
+
+
 def test_defaults_and_task_configs_per_env() -> None:
     assert type(ActiveVisionConfig().task) is ActiveVisionTaskConfig
     assert type(LookAroundConfig().task) is HeadControlTaskConfig

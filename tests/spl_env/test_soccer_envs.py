@@ -18,6 +18,7 @@ from agents.soccer_baselines import believed_ball, believed_pose
 from perception.field.dimensions import FieldDimensions
 from perception.representations import BALL, SELF_POSE, PerceptionOutput
 from perception.types import BallEstimate, SensorFrame, SlamEstimate
+from spl_env import team_v0
 from spl_env.envs.core import SplEnv
 from spl_env.observations.ball import BallEncoder
 from spl_env.observations.base import EncoderInput, unsquash
@@ -366,3 +367,33 @@ def test_the_scripted_head_looks_again_at_a_waiting_sighting() -> None:
     assert scan[0] == pytest.approx(
         config.scan_amplitude_rad * math.sin(2 * math.pi / config.scan_period_s)
     )
+
+
+@pytest.mark.parametrize(
+    ("env_id", "overrides", "match"),
+    [
+        # the ball would start beyond the touch lines (an infinite bound crashed numpy's draw)
+        ("SPL/Goalie-v0", {"task.shot_distance_m": (1.5, math.inf)}, r"shot_distance_m.*<= 3\.83"),
+        ("SPL/Goalie-v0", {"task.shot_distance_m": (30.0, 40.0)}, r"inside the touch lines"),
+        # our robot would start behind our own goal line (7.7 m = 9 m - 1.3 m from it)
+        ("SPL/PenaltyShootout-v0", {"task.start_behind_ball_m": 20.0}, r"\(0, 7\.7\]"),
+        # the goalie would stand beside its goal (half its 1.5 m inner width)
+        ("SPL/PenaltyShootout-v0", {"task.goalie_max_offset_m": 10.0}, r"\[0, 0\.75\]"),
+        # head targets beyond the joints were clipped to them silently
+        ("SPL/Striker-v0", {"task.scan_pitch_rad": 3.0}, r"scan_pitch_rad must be finite and in"),
+        ("SPL/Striker-v0", {"task.scan_amplitude_rad": 100.0}, r"scan_amplitude_rad.*2\.0856"),
+        ("SPL/Goalie-v0", {"task.glance_amplitude_rad": 2.5}, r"glance_amplitude_rad.*2\.0856"),
+    ],
+)
+def test_start_places_and_head_scans_outside_the_field_or_joints_are_refused(
+    env_id: str, overrides: dict[str, Any], match: str
+) -> None:
+    with pytest.raises(ValueError, match=match):
+        gym.make(env_id, camera_mode="geometric", frontend="colour", **overrides)
+
+
+def test_the_team_env_refuses_a_scan_beyond_the_head_joints() -> None:
+    with pytest.raises(ValueError, match=r"TeamTaskConfig\.scan_amplitude_rad"):
+        team_v0.parallel_env(
+            camera_mode="geometric", frontend="colour", **{"task.scan_amplitude_rad": 100.0}
+        )
