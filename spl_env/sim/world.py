@@ -24,6 +24,7 @@ from perception.validation import check_finite, check_positive, finite_points, f
 
 MAX_PARTS_PER_BODY = 16  # PyBullet's shape arrays crash beyond 16 shapes
 REST_SPEED = 1e-6  # m/s and rad/s: a dynamic body this slow in contact lies at rest
+CONTACT_CLEAR_HEIGHT_M = 1000.0  # m: a dynamic body this high touches nothing
 REST_CLEARANCE_M = 0.05  # a moved body this near a resting one could touch it in a step
 # Bullet's collision filter groups: bit 0 marks dynamic bodies and bit 1 static ones (its
 # defaults); a body that ray tests pass through gets a private bit from those above.
@@ -533,9 +534,35 @@ class BulletWorld:
         return int(p.saveState(physicsClientId=self.client))
 
     def restore_state(self, state_id: int) -> None:
-        """Return to a snapshot from :meth:`save_state`."""
+        """Return to a snapshot from :meth:`save_state`, forgetting the contacts Bullet cached
+        since (:meth:`_forget_contacts`)."""
         p.restoreState(stateId=state_id, physicsClientId=self.client)
+        self._forget_contacts()
         self._disturbed = True
+
+    def _forget_contacts(self) -> None:
+        """Drop the contact points Bullet keeps for each dynamic body between steps.
+
+        ``restoreState`` leaves them: a ball that ended an episode within a couple of
+        centimetres of its next start kept a stale carpet contact into the next episode, which
+        then crept by about 2e-7 m a step, so the same seed and actions gave different
+        observations after different previous episodes. Each dynamic body is lifted clear of
+        everything for one collision pass (which releases its contacts) and put back.
+        """
+        client = self.client
+        poses = [p.getBasePositionAndOrientation(b, physicsClientId=client) for b in self._dynamic]
+        velocities = [p.getBaseVelocity(b, physicsClientId=client) for b in self._dynamic]
+        for k, body_id in enumerate(self._dynamic):
+            clear = (0.0, 0.0, CONTACT_CLEAR_HEIGHT_M * (k + 1))
+            p.resetBasePositionAndOrientation(body_id, clear, poses[k][1], physicsClientId=client)
+        p.performCollisionDetection(physicsClientId=client)
+        for body_id, (position, orientation), (linear, angular) in zip(
+            self._dynamic, poses, velocities, strict=True
+        ):
+            p.resetBasePositionAndOrientation(
+                body_id, position, orientation, physicsClientId=client
+            )
+            p.resetBaseVelocity(body_id, linear, angular, physicsClientId=client)
 
     # ----- sensing ------------------------------------------------------------------------
     def ray_test(
