@@ -53,6 +53,17 @@ def check_finite(owner: str, name: str, value: object) -> None:
         raise ValueError(f"{_label(owner, name)} must be finite, got {value!r}")
 
 
+def check_reals(owner: str, name: str, value: object, length: int) -> None:
+    """Raise unless ``value`` is a tuple or list of ``length`` finite real numbers (a bad one is
+    named ``name[k]``)."""
+    if not isinstance(value, tuple | list) or len(value) != length:
+        raise InvalidTypeError(
+            f"{_label(owner, name)} must be a tuple of {length} real numbers, got {_got(value)}"
+        )
+    for k, item in enumerate(value):
+        check_finite(owner, f"{name}[{k}]", item)
+
+
 def check_in_interval(
     owner: str,
     name: str,

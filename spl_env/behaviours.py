@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from perception.geometry import FloatArray, wrap_scalar
+from perception.validation import check_positive
 from spl_env.field import FieldDimensions
 from spl_env.robots.nao import NaoRobot
 from spl_env.sim.placement import Placement
@@ -30,8 +31,7 @@ class WalkerConfig:
 
     def __post_init__(self) -> None:
         for name, value in vars(self).items():
-            if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"WalkerConfig.{name} must be finite and > 0, got {value}")
+            check_positive("WalkerConfig", name, value)
 
 
 def waypoint_command(config: WalkerConfig, pose: FloatArray, target: FloatArray) -> FloatArray:

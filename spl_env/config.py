@@ -14,7 +14,13 @@ import math
 from dataclasses import dataclass, field
 
 from perception.pipeline import POLE_MAPPING_POSES, PipelineConfig
-from perception.validation import check_bool, check_choice, check_int, check_nested_configs
+from perception.validation import (
+    check_bool,
+    check_choice,
+    check_int,
+    check_nested_configs,
+    check_positive,
+)
 from spl_env.robots.nao import RobotConfig
 from spl_env.scenes.spl_field import SceneConfig
 from spl_env.sensors.rig import RigConfig
@@ -62,6 +68,8 @@ class CoreConfig:
 
     def __post_init__(self) -> None:
         check_nested_configs(self)
+        check_positive(type(self).__name__, "physics_dt_s", self.physics_dt_s)
+        check_positive(type(self).__name__, "control_dt_s", self.control_dt_s)
         if not (0 < self.physics_dt_s <= min(self.control_dt_s, 0.1)) or not (
             self.control_dt_s <= 1.0
         ):

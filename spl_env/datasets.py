@@ -40,7 +40,7 @@ from numpy.typing import NDArray
 
 from perception.geometry import FloatArray, project_points, range_bearing
 from perception.types import PoleCode
-from perception.validation import check_nested_configs
+from perception.validation import check_nested_configs, check_positive, check_reals
 from perception.vision.cnn_detector import OBJECT_CLASSES, pole_class_name
 from spl_env.robots.nao import NaoRobot, RobotConfig
 from spl_env.scenes.spl_field import SceneConfig, SplFieldScene
@@ -83,17 +83,14 @@ class DatasetConfig:
             if not (isinstance(value, (int, float)) and 0.0 <= value <= 1.0):
                 raise ValueError(f"DatasetConfig.{name} must be in [0, 1], got {value!r}")
         for name, low in (("aim_range_m", 0.3), ("noise_std", 0.0)):
+            check_reals("DatasetConfig", name, getattr(self, name), 2)
             lo, hi = getattr(self, name)
-            if not (math.isfinite(hi) and low <= lo <= hi):
+            if not low <= lo <= hi:
                 raise ValueError(
                     f"DatasetConfig.{name} must be (lo, hi) with {low} <= lo <= hi, "
                     f"got {getattr(self, name)}"
                 )
-        if not (math.isfinite(self.max_yaw_rate_rps) and self.max_yaw_rate_rps >= 0.0):
-            raise ValueError(
-                f"DatasetConfig.max_yaw_rate_rps must be finite and >= 0, "
-                f"got {self.max_yaw_rate_rps}"
-            )
+        check_positive("DatasetConfig", "max_yaw_rate_rps", self.max_yaw_rate_rps, allow_zero=True)
 
 
 def class_names(codes: tuple[PoleCode, ...]) -> tuple[str, ...]:

@@ -60,7 +60,13 @@ from perception.types import (
     PoleGeometry,
     pole_ids_by_colours,
 )
-from perception.validation import check_in_interval, check_int, check_positive, check_rgb_image
+from perception.validation import (
+    check_in_interval,
+    check_int,
+    check_positive,
+    check_reals,
+    check_rgb_image,
+)
 
 HsvRange = tuple[tuple[int, int, int], tuple[int, int, int]]
 """Inclusive ``((h, s, v) low, (h, s, v) high)`` bounds, OpenCV convention."""
@@ -116,8 +122,9 @@ class ColourFilterConfig:
         alpha_max = self.alpha_max_deg
         check_in_interval(_OWNER, "alpha_max_deg", alpha_max, 0.0, 90.0, low_inclusive=True)
         for name in ("band_height_ratio", "band_width_ratio"):
+            check_reals(_OWNER, name, getattr(self, name), 2)
             lo, hi = getattr(self, name)
-            if not (math.isfinite(hi) and 0.0 < lo < hi):
+            if not 0.0 < lo < hi:
                 raise ValueError(
                     f"ColourFilterConfig.{name} must be (lo, hi) with 0 < lo < hi, "
                     f"got {getattr(self, name)}"

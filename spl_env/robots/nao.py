@@ -28,7 +28,7 @@ from perception.geometry import (
     wrap_angle,
 )
 from perception.types import CameraState
-from perception.validation import check_positive
+from perception.validation import check_finite, check_positive, check_reals
 from spl_env.sim.world import BulletWorld, LinkSpec, VisualPart
 
 NAO_GREY = (0.82, 0.82, 0.84, 1.0)
@@ -75,8 +75,9 @@ class RobotConfig:
     def __post_init__(self) -> None:
         for name in ("max_speed", "max_accel"):
             values = getattr(self, name)
-            if len(values) != 3 or not all(math.isfinite(v) and v > 0 for v in values):
-                raise ValueError(f"RobotConfig.{name} must be 3 finite values > 0, got {values}")
+            check_reals("RobotConfig", name, values, 3)
+            for k, value in enumerate(values):
+                check_positive("RobotConfig", f"{name}[{k}]", value)
         for name in (
             "body_radius_m",
             "head_yaw_limit_rad",
@@ -99,27 +100,25 @@ class RobotConfig:
             raise ValueError(
                 f"RobotConfig.head_yaw_limit_rad must be <= pi, got {self.head_yaw_limit_rad}"
             )
+        check_finite("RobotConfig", "head_pitch_min_rad", self.head_pitch_min_rad)
+        check_finite("RobotConfig", "head_pitch_max_rad", self.head_pitch_max_rad)
         if not -math.pi / 2 < self.head_pitch_min_rad < 0 < self.head_pitch_max_rad < math.pi / 2:
             raise ValueError(
                 "RobotConfig needs -pi/2 < head_pitch_min_rad < 0 < head_pitch_max_rad < pi/2, got "
                 f"{self.head_pitch_min_rad} and {self.head_pitch_max_rad}"
             )
         for name in ("camera_offset_m", "bottom_camera_offset_m"):
-            offset = getattr(self, name)
-            if len(offset) != 3 or not all(map(math.isfinite, offset)):
-                raise ValueError(f"RobotConfig.{name} must be 3 finite values, got {offset}")
-        for name in ("head_pitch_joint_offset_m", "camera_tilt_rad", "bottom_camera_tilt_rad"):
-            if not math.isfinite(getattr(self, name)):
-                raise ValueError(f"RobotConfig.{name} must be finite, got {getattr(self, name)}")
-        if not math.isfinite(self.turn_bias_rad_per_m):
-            raise ValueError(
-                f"RobotConfig.turn_bias_rad_per_m must be finite, got {self.turn_bias_rad_per_m}"
-            )
+            check_reals("RobotConfig", name, getattr(self, name), 3)
+        for name in (
+            "head_pitch_joint_offset_m",
+            "camera_tilt_rad",
+            "bottom_camera_tilt_rad",
+            "turn_bias_rad_per_m",
+        ):
+            check_finite("RobotConfig", name, getattr(self, name))
         check_positive("RobotConfig", "bump_turn_rps", self.bump_turn_rps, allow_zero=True)
         for name in ("sway_roll_rad", "sway_pitch_rad", "sway_bob_m"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0):
-                raise ValueError(f"RobotConfig.{name} must be finite and >= 0, got {value}")
+            check_positive("RobotConfig", name, getattr(self, name), allow_zero=True)
 
 
 def camera_state_for(

@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from perception.geometry import FloatArray
+from perception.validation import check_finite, check_in_interval, check_positive
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -59,26 +60,21 @@ class OdometryConfig:
     rotation_noise_rad_per_sqrt_rad: float = 0.05  # std of dθ per sqrt(rad turned)
 
     def __post_init__(self) -> None:
+        owner = "odometry"
         for name in ("translation_scale_error", "rotation_scale_error"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and -0.5 < value < 0.5):
-                raise ValueError(f"odometry.{name} must be in (-0.5, 0.5), got {value}")
+            check_in_interval(owner, name, getattr(self, name), -0.5, 0.5)
         for name in ("translation_scale_error_std", "rotation_scale_error_std"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and 0.0 <= value <= 0.2):
-                raise ValueError(f"odometry.{name} must be in [0, 0.2], got {value}")
-        drift = self.heading_drift_rad_per_m
-        if not math.isfinite(drift):
-            raise ValueError(f"odometry.heading_drift_rad_per_m must be finite, got {drift}")
+            check_positive(
+                owner, name, getattr(self, name), allow_zero=True, upper=0.2, upper_inclusive=True
+            )
+        check_finite(owner, "heading_drift_rad_per_m", self.heading_drift_rad_per_m)
         for name in (
             "heading_drift_std_rad_per_m",
             "translation_noise_m_per_sqrt_m",
             "heading_noise_rad_per_sqrt_m",
             "rotation_noise_rad_per_sqrt_rad",
         ):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0.0):
-                raise ValueError(f"odometry.{name} must be finite and >= 0, got {value}")
+            check_positive(owner, name, getattr(self, name), allow_zero=True)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -11,7 +11,7 @@ import numpy as np
 
 from perception.geometry import FloatArray
 from perception.representations import PerceptionOutput
-from perception.validation import check_positive
+from perception.validation import check_positive, check_reals
 from spl_env.robots.nao import NaoCommand, NaoRobot, walk_target
 from spl_env.tasks.base import TaskContext
 from spl_env.tasks.soccer import (
@@ -45,6 +45,7 @@ class GoalieTaskConfig(SoccerTaskConfig):
             raise ValueError(
                 f"{owner}.n_other_robots must be >= 1 (the kicker), got {self.n_other_robots}"
             )
+        check_reals(owner, "shot_distance_m", self.shot_distance_m, 2)
         low, high = self.shot_distance_m
         if not 0.5 <= low <= high:
             raise ValueError(

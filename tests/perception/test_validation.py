@@ -23,6 +23,7 @@ from perception.validation import (
     check_nested_configs,
     check_positive,
     check_probability,
+    check_reals,
     check_rgb_image,
     finite_points,
     finite_vector,
@@ -320,3 +321,17 @@ def test_nested_configs_must_be_of_their_declared_class() -> None:
         InvalidTypeError, match=r"^_Outer\.maybe must be a _Inner or None, got str$"
     ):
         check_nested_configs(_Outer(maybe="bogus"))  # type: ignore[arg-type]
+
+
+def test_check_reals_takes_a_tuple_or_list_of_finite_reals() -> None:
+    check_reals("C", "pair", (0.5, 2), 2)
+    check_reals("C", "pair", [0.5, np.float64(2.0)], 2)
+    for bad in (None, "ab", (1.0,), (1.0, 2.0, 3.0), 1.0):
+        with pytest.raises(
+            InvalidTypeError, match=r"^C\.pair must be a tuple of 2 real numbers, got"
+        ):
+            check_reals("C", "pair", bad, 2)
+    with pytest.raises(InvalidTypeError, match=r"^C\.pair\[1\] must be a real number, got str"):
+        check_reals("C", "pair", (1.0, "x"), 2)
+    with pytest.raises(ValueError, match=r"^C\.pair\[0\] must be finite, got nan"):
+        check_reals("C", "pair", (math.nan, 1.0), 2)

@@ -22,8 +22,10 @@ from spl_env.config import SPL_ALIASES, EnvConfig
 from spl_env.envs.active_vision import ACTIVE_VISION_ALIASES, ActiveVisionConfig
 from spl_env.envs.look_around import LookAroundConfig
 from spl_env.overrides import apply_overrides
+from spl_env.robots.nao import RobotConfig
 from spl_env.scenes.spl_field import SceneConfig
 from spl_env.sensors.laser import LaserConfig
+from spl_env.sensors.odometry import OdometryConfig
 from spl_env.sensors.rig import RigConfig
 from spl_env.tasks.active_vision import ActiveVisionTaskConfig
 from spl_env.tasks.base import TaskConfig
@@ -356,6 +358,17 @@ def test_env_config_validates_when_built_directly() -> None:
         (lambda: SceneConfig(poles_enabled="False"), r"SceneConfig\.poles_enabled must be a bool"),
         (lambda: SceneConfig(boards_enabled=1), r"SceneConfig\.boards_enabled must be a bool"),
         (lambda: EnvConfig(info_timing="yes"), r"EnvConfig\.info_timing must be a bool"),
+        (lambda: EnvConfig(control_dt_s="0.1"), r"EnvConfig\.control_dt_s must be a real number"),
+        (
+            lambda: EnvConfig(robot=RobotConfig(max_speed=(0.25,))),
+            r"RobotConfig\.max_speed must be a tuple of 3 real numbers, got tuple",
+        ),
+        (
+            lambda: EnvConfig(
+                sensors=RigConfig(odometry=OdometryConfig(heading_drift_rad_per_m=None))
+            ),
+            r"odometry\.heading_drift_rad_per_m must be a real number, got NoneType",
+        ),
     ],
 )
 def test_nested_configs_and_flags_of_the_wrong_type_are_refused_by_name(
