@@ -46,6 +46,12 @@ def is_finite_real(value: object) -> bool:
     return isinstance(value, _REAL) and not isinstance(value, bool) and math.isfinite(value)
 
 
+def check_real(owner: str, name: str, value: object) -> None:
+    """Raise unless ``value`` is a real number (NaN and the infinities included: for a field
+    where NaN means "none")."""
+    _check_real(owner, name, value, float_only=False)
+
+
 def check_finite(owner: str, name: str, value: object) -> None:
     """Raise unless ``value`` is a finite real number."""
     _check_real(owner, name, value, float_only=False)
@@ -212,12 +218,22 @@ def check_choice(
         raise ValueError(f"{_label(owner, name)} must be one of {tuple(choices)}, got {value!r}")
 
 
+def real_array(value: ArrayLike, name: str, expected: str) -> FloatArray:
+    """``value`` as a new float64 array, or InvalidTypeError naming the argument ``name`` (which
+    must be ``expected``) when it is not an array of real numbers: strings, bools, complex
+    numbers and objects are refused rather than converted."""
+    try:
+        raw = np.asarray(value)
+    except (TypeError, ValueError) as error:
+        raise InvalidTypeError(f"{name} must be {expected}, got {value!r}") from error
+    if raw.dtype.kind not in "iuf":
+        raise InvalidTypeError(f"{name} must be {expected}, got {value!r}")
+    return np.array(raw, dtype=np.float64)
+
+
 def finite_vector(value: ArrayLike, name: str, size: int) -> FloatArray:
     """``value`` as a new finite float64 array of shape (size,); errors name the argument."""
-    try:
-        array = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise InvalidTypeError(f"{name} must be {size} numbers, got {value!r}") from error
+    array = real_array(value, name, f"{size} numbers")
     if array.shape != (size,):
         raise ValueError(f"{name} must have shape ({size},), got shape {array.shape}")
     if not np.isfinite(array).all():
@@ -228,12 +244,7 @@ def finite_vector(value: ArrayLike, name: str, size: int) -> FloatArray:
 def finite_points(value: ArrayLike, name: str, minimum: int = 0) -> FloatArray:
     """``value`` as a new finite float64 (N, 2) array of points with N >= ``minimum``; errors
     name the argument and, for NaN or infinity, the rows holding them."""
-    try:
-        points = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise InvalidTypeError(
-            f"{name} must be an (N, 2) array of numbers, got {value!r}"
-        ) from error
+    points = real_array(value, name, "an (N, 2) array of numbers")
     if points.ndim != 2 or points.shape[1] != 2 or len(points) < minimum:
         raise ValueError(
             f"{name} must have shape (N, 2) with N >= {minimum}, got shape {points.shape}"

@@ -29,7 +29,7 @@ from typing import Literal, get_args
 import numpy as np
 
 from perception.geometry import FloatArray
-from perception.validation import InvalidTypeError, check_covariance, check_finite
+from perception.validation import InvalidTypeError, check_covariance, check_finite, check_real
 
 FeatureKind = Literal[
     "line",
@@ -119,6 +119,7 @@ class FieldFeature:
         for i, block in enumerate(cov):
             check_covariance(block, f"{owner}.cov[{i}]", 2)
         check_direction(self.kind, self.direction, owner)
+        check_real(owner, "direction_std", self.direction_std)
         if self.direction is None:
             if not math.isnan(self.direction_std):
                 raise ValueError(

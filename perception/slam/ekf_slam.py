@@ -456,7 +456,7 @@ class EkfSlam:
         """
         if gate_probability is not None:
             check_probability("update_pose", "gate_probability", gate_probability)
-        y, H, rank = whitened_measurement(observation, self._mu[:3], float(weight))
+        y, H, rank = whitened_measurement(observation, self._mu[:3], weight)
         if rank == 0:
             return False
         S = innovation_covariance(self._sigma, H, _WHITE, _POSE)
@@ -503,6 +503,7 @@ class EkfSlam:
 
     def _require_mapped(self, landmark_id: int, name: str) -> None:
         """Raise ValueError naming ``name`` unless ``landmark_id`` is in the map."""
+        check_int("EkfSlam", name, landmark_id)
         if landmark_id not in self._column:
             raise ValueError(f"{name} {landmark_id} is not mapped; mapped ids: {self.landmark_ids}")
 

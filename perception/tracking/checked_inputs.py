@@ -28,6 +28,8 @@ def checked_sightings(
         check_positive(name, "range_m", sighting.range_m)
         check_finite(name, "bearing_rad", sighting.bearing_rad)
         check_finite(name, "score", sighting.score)
+        if isinstance(sighting, RobotSighting) and sighting.team not in (None, 0, 1):
+            raise ValueError(f"{name}.team must be 0, 1 or None, got {sighting.team!r}")
         cov = check_covariance(sighting.cov, f"{name}.cov", 2)
         checked.append((float(sighting.range_m), float(sighting.bearing_rad), cov))
     return checked

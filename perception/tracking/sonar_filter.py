@@ -52,6 +52,7 @@ from perception.validation import (
     check_instance,
     check_int,
     check_positive,
+    real_array,
 )
 
 SECTOR_NAMES: tuple[str, str, str] = ("left", "middle", "right")  # row order of a reading
@@ -288,13 +289,9 @@ class SonarFilter:
 
 def _echo_array(echoes: ArrayLike) -> FloatArray:
     """``echoes`` as a (3, E) float64 array; raise unless every entry is NaN or finite > 0."""
-    try:
-        array = np.asarray(echoes, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise InvalidTypeError(
-            f"SonarFilter.update: echoes must be a ({N_SONAR_SECTORS}, E) array of distances, "
-            f"got {echoes!r}"
-        ) from error
+    array = real_array(
+        echoes, "SonarFilter.update: echoes", f"a ({N_SONAR_SECTORS}, E) array of distances"
+    )
     if array.ndim != 2 or array.shape[0] != N_SONAR_SECTORS:
         raise ValueError(
             f"SonarFilter.update: echoes must have shape ({N_SONAR_SECTORS}, E), "
@@ -393,8 +390,12 @@ def confirm_with_sonar(
     Returns the kept sightings in input order.
     """
     config = SonarFilterConfig() if config is None else config
+    check_instance("config", config, SonarFilterConfig)
     if not isinstance(model, SonarModel):
         raise InvalidTypeError(f"model must be a SonarModel, got {type(model).__name__}")
+    for name, items in (("sightings", sightings), ("observations", observations)):
+        if not isinstance(items, Sequence):
+            raise InvalidTypeError(f"{name} must be a sequence, got {type(items).__name__}")
     for k, obs in enumerate(observations):
         if not isinstance(obs, SonarObservation):
             raise InvalidTypeError(

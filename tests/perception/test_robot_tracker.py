@@ -620,3 +620,9 @@ def test_covariances_stay_symmetric_psd_and_ids_increase(
         assert {t.track_id for t in tracker.confirmed_tracks()} == {
             t.track_id for t in tracks if t.confirmed
         }
+
+
+def test_a_sighting_of_a_team_that_does_not_exist_is_refused() -> None:
+    sighting = RobotSighting(range_m=1.0, bearing_rad=0.1, cov=np.eye(2) * 1e-3, team=5)
+    with pytest.raises(ValueError, match=r"^sightings\[0\]\.team must be 0, 1 or None, got 5"):
+        RobotTracker().update(0.0, [sighting], (np.zeros(3), np.zeros((3, 3))))

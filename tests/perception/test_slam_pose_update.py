@@ -109,6 +109,18 @@ def test_a_weight_fuses_that_share_of_the_information() -> None:
     np.testing.assert_allclose(slam.cov, reference.cov, atol=1e-14)
 
 
+@pytest.mark.parametrize("weight", ["1", None, 0.0, 1.5])
+def test_a_weight_that_is_not_a_share_is_refused_by_name(weight: object) -> None:
+    slam = mapped_slam()
+    with pytest.raises(ValueError, match=r"weight must be"):
+        slam.update_pose(observation(list(slam.mean[:3]), FULL), weight=weight)  # type: ignore[arg-type]
+
+
+def test_a_landmark_id_that_is_not_an_int_is_refused_by_name() -> None:
+    with pytest.raises(TypeError, match=r"landmark_id must be an int, got list"):
+        mapped_slam().measurement_jacobian([1])  # type: ignore[arg-type]
+
+
 def test_without_landmarks_it_is_the_field_pose_filter_update() -> None:
     config = PoseFilterConfig(gate_probability=None, observation_weight=0.3)
     slam = EkfSlam(EkfSlamConfig(), [1.0, 2.0, 3.0])

@@ -582,3 +582,22 @@ def test_confirm_rejects_bad_inputs():
         confirm_with_sonar([_sighting(NAN, 0.0)], [observation], MODEL)
     with pytest.raises(ValueError, match=r"sightings\[0\].bearing_rad"):
         confirm_with_sonar([_sighting(1.0, math.inf)], [observation], MODEL)
+
+
+def test_confirm_with_sonar_names_arguments_of_the_wrong_kind() -> None:
+    sighting = RobotSighting(range_m=1.0, bearing_rad=0.1, cov=np.eye(2) * 1e-3)
+    model = SonarModel()
+    with pytest.raises(InvalidTypeError, match=r"^sightings must be a sequence, got NoneType"):
+        confirm_with_sonar(None, [], model)  # type: ignore[arg-type]
+    with pytest.raises(InvalidTypeError, match=r"^sightings must be a sequence, got RobotSighting"):
+        confirm_with_sonar(sighting, [], model)  # type: ignore[arg-type]
+    with pytest.raises(InvalidTypeError, match=r"^observations must be a sequence, got NoneType"):
+        confirm_with_sonar([], None, model)  # type: ignore[arg-type]
+    with pytest.raises(InvalidTypeError, match=r"^config must be a SonarFilterConfig, got str"):
+        confirm_with_sonar([], [], model, "x")  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("echoes", [np.ones((3, 2)) * (1 + 1j), [["1"], ["1"], ["1"]]])
+def test_echoes_that_are_not_real_numbers_are_refused(echoes: Any) -> None:
+    with pytest.raises(InvalidTypeError, match=r"echoes must be a \(3, E\) array of distances"):
+        SonarFilter().update(0.0, echoes)

@@ -23,11 +23,13 @@ from perception.validation import (
     check_nested_configs,
     check_positive,
     check_probability,
+    check_real,
     check_reals,
     check_rgb_image,
     finite_points,
     finite_vector,
     is_finite_real,
+    real_array,
 )
 
 NOT_NUMBERS = [True, False, np.bool_(True), "1.0", None, [1.0], 1j]
@@ -335,3 +337,20 @@ def test_check_reals_takes_a_tuple_or_list_of_finite_reals() -> None:
         check_reals("C", "pair", (1.0, "x"), 2)
     with pytest.raises(ValueError, match=r"^C\.pair\[0\] must be finite, got nan"):
         check_reals("C", "pair", (math.nan, 1.0), 2)
+
+
+@pytest.mark.parametrize(
+    "value", [["0.1", "0", "0"], [True, False, True], np.array([0.1 + 1j, 0, 0])]
+)
+def test_arrays_of_strings_bools_or_complex_numbers_are_not_converted(value: object) -> None:
+    with pytest.raises(InvalidTypeError, match=r"^v must be 3 numbers, got"):
+        finite_vector(value, "v", 3)  # type: ignore[arg-type]
+    with pytest.raises(InvalidTypeError, match=r"^v must be numbers, got"):
+        real_array(value, "v", "numbers")  # type: ignore[arg-type]
+
+
+def test_check_real_allows_nan_but_not_other_types() -> None:
+    check_real("F", "std", math.nan)
+    check_real("F", "std", math.inf)
+    with pytest.raises(InvalidTypeError, match=r"^F\.std must be a real number, got NoneType"):
+        check_real("F", "std", None)
