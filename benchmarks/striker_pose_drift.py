@@ -1,0 +1,123 @@
+"""How the striker's believed pose drifts between pole sightings, and what that does to its ball.
+
+What: ``--episodes`` episodes of ``--env`` (``SPL/Striker-v0``) from ``reset(seed=--seed + k)``,
+played by ``--player`` (the centre-kicking striker), with the env overrides given (``--set
+camera_mode=geometric --set frontend=colour`` for the fast mode). At every step: the believed
+pose's position and heading errors (``info["perception"]`` against ``info["ground_truth"]``),
+the time since a pole was last sighted (``info["perception"]["sighted"]``; the known start
+pose counts as one), whether our walk was blocked (the body stayed put while the walk engine,
+and so the odometry, stepped), the heading's NEES (squared error over the believed variance; 1 for a consistent filter) and the
+position's (2 for a consistent one), and the ball's error on the field while it lies within
+``NEAR_M`` of our robot and is believed. Reported over all steps and by band of the time since
+the last pole sighting; ``blocked_share_of_heading_change`` is the share of the summed
+step-to-step change of the heading error that falls in blocked steps.
+
+    python benchmarks/striker_pose_drift.py --set camera_mode=geometric --set frontend=colour \\
+        --episodes 100                                      # tuning seeds 0-99, ~1 min
+
+Writes ``striker_pose_drift.json`` (``--name``) to ``--out`` (``benchmarks/results``).
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+import time
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from ball_flatness import episodes_parser  # benchmarks/ is the script's folder
+
+import spl_env  # noqa: F401  (registers the env ids)
+from agents.evaluate import load_policy, parse_overrides, played_steps
+from spl_env.envs.core import SplEnv
+
+NEAR_M = 3.0  # the ball's error counts while it lies this near our robot (m), as the issue's
+AGENT = 0  # our robot's row in the world state
+GAP_BANDS_S = (0.0, 0.1, 1.0, 3.0, 6.0, math.inf)  # time since the last pole sighting (s)
+
+
+def main() -> None:
+    parser = episodes_parser(__doc__, "striker_pose_drift", player="centre_kick")
+    args = parser.parse_args()
+    start = time.perf_counter()
+    env = gym.make(args.env, **parse_overrides(args.set))
+    core = env.unwrapped
+    if not isinstance(core, SplEnv):
+        raise TypeError(f"expected an SplEnv, got {type(core).__name__}")
+    dt = core.config.control_dt_s
+    policy = load_policy(args.player, env.get_wrapper_attr("config"))
+    rows: list[tuple[float, ...]] = []  # per step: see COLUMNS
+    for seed in range(args.seed, args.seed + args.episodes):
+        since = 0.0  # the start pose is known (the prior)
+        for _, info in played_steps(env, policy, seed):
+            truth, belief = info["ground_truth"], info["perception"]
+            offset = belief["pose"] - truth["robot_pose"]
+            heading = math.remainder(float(offset[2]), math.tau)
+            cov = np.asarray(belief["pose_cov"])
+            since = 0.0 if np.any(belief["sighted"]) else since + dt
+            near = np.hypot(*(truth["ball"] - truth["robot_pose"][:2])) < NEAR_M
+            ball = np.hypot(*(truth["ball"] - belief["ball"])) if belief["ball_known"] else None
+            rows.append(
+                (
+                    seed,
+                    float(np.hypot(offset[0], offset[1])),
+                    heading,
+                    heading**2 / cov[2, 2],
+                    float(offset[:2] @ np.linalg.solve(cov[:2, :2], offset[:2])),
+                    since,
+                    float(core.world_state.blocked[AGENT]),
+                    float(ball) if near and ball is not None else math.nan,
+                )
+            )
+    env.close()
+    result = {
+        "env": args.env,
+        "player": args.player,
+        "seeds": [args.seed, args.seed + args.episodes - 1],
+        "overrides": args.set,
+        **summary(np.array(rows)),
+        "run_s": time.perf_counter() - start,
+    }
+    args.out.mkdir(parents=True, exist_ok=True)
+    path = args.out / f"{args.name}.json"
+    path.write_text(json.dumps(result, indent=2))
+    print(json.dumps(result, indent=2))
+
+
+def summary(rows: np.ndarray) -> dict[str, Any]:
+    """Means over the steps ``rows`` (N, 8) and by band of the time since a pole sighting."""
+    seed, position, heading, heading_nees, position_nees, since, blocked, ball = rows.T
+    change = np.abs(np.diff(heading))[np.diff(seed) == 0]  # within episodes
+    in_blocked = blocked[1:][np.diff(seed) == 0] > 0
+    bands = {}
+    for low, high in itertools.pairwise(GAP_BANDS_S):
+        band = (since >= low) & (since < high)
+        bands[f"{low:g}-{high:g} s"] = {
+            "share_of_steps": float(band.mean()),
+            "position_error_m": float(position[band].mean()) if band.any() else None,
+            "heading_error_deg": float(np.degrees(np.abs(heading[band])).mean())
+            if band.any()
+            else None,
+            "ball_error_m": float(np.nanmean(ball[band]))
+            if np.isfinite(ball[band]).any()
+            else None,
+        }
+    return {
+        "steps": len(rows),
+        "position_error_m": float(position.mean()),
+        "heading_error_deg": float(np.degrees(np.abs(heading)).mean()),
+        "heading_nees": float(heading_nees.mean()),
+        "position_nees": float(position_nees.mean()),
+        "ball_error_m": float(np.nanmean(ball)),
+        "steps_with_a_pole_sighted": float((since == 0.0).mean()),
+        "blocked_steps": float(blocked.mean()),
+        "blocked_share_of_heading_change": float(change[in_blocked].sum() / change.sum()),
+        "by_time_since_a_pole_sighting": bands,
+    }
+
+
+if __name__ == "__main__":
+    main()
