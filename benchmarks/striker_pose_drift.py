@@ -6,11 +6,11 @@ camera_mode=geometric --set frontend=colour`` for the fast mode). At every step:
 pose's position and heading errors (``info["perception"]`` against ``info["ground_truth"]``),
 the time since a pole was last sighted (``info["perception"]["sighted"]``; the known start
 pose counts as one), whether our walk was blocked (the body stayed put while the walk engine,
-and so the odometry, stepped), the heading's NEES (squared error over the believed variance; 1 for a consistent filter) and the
-position's (2 for a consistent one), and the ball's error on the field while it lies within
-``NEAR_M`` of our robot and is believed. Reported over all steps and by band of the time since
-the last pole sighting; ``blocked_share_of_heading_change`` is the share of the summed
-step-to-step change of the heading error that falls in blocked steps.
+and so the odometry, stepped), the heading's NEES (squared error over the believed variance;
+1 for a consistent filter) and the position's (2 for a consistent one), and the ball's error on
+the field while it lies within ``NEAR_M`` of our robot and is believed. Reported over all steps
+and by band of the time since the last pole sighting; ``blocked_share_of_heading_change`` is the
+share of the summed step-to-step change of the heading error that falls in blocked steps.
 
     python benchmarks/striker_pose_drift.py --set camera_mode=geometric --set frontend=colour \\
         --episodes 100                                      # tuning seeds 0-99, ~1 min
