@@ -27,18 +27,16 @@ import time
 from pathlib import Path
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 import torch
-from ball_flatness import episodes_parser  # benchmarks/ is the script's folder
+from ball_flatness import episodes_parser, made_env  # benchmarks/ is the script's folder
 
 import spl_env  # noqa: F401  (registers the env ids)
-from agents.evaluate import load_policy, parse_overrides, played_steps
+from agents.evaluate import load_policy, played_steps
 from perception.geometry import invert, transform_points
 from perception.representations import BALL_SIGHTINGS
 from perception.types import BallSighting
 from perception.vision.cnn_ball import ball_in_view
-from spl_env.envs.core import SplEnv
 
 RESULTS = Path("benchmarks/results")
 MIN_RANGE_M = 0.6  # nearer, the top camera loses the ball at the image's bottom
@@ -65,10 +63,7 @@ def sighting_point(sighting: BallSighting) -> np.ndarray:
 
 def record(args: argparse.Namespace) -> np.ndarray:
     """Counts (range bands, robot bands, 2): steps with the ball in view, and those seen."""
-    env = gym.make(args.env, **parse_overrides(args.set))
-    core = env.unwrapped
-    if not isinstance(core, SplEnv):
-        raise TypeError(f"expected an SplEnv, got {type(core).__name__}")
+    env, core = made_env(args)
     camera = core.config.sensors.camera.model
     radius = core.config.perception.cnn_ball.radius_m
     margin = core.config.perception.ball_filter.view_margin

@@ -135,15 +135,22 @@ def episodes_parser(
     return parser
 
 
+def made_env(args: argparse.Namespace) -> tuple[gym.Env, SplEnv]:
+    """``args.env`` made with ``args.set``'s overrides (:func:`episodes_parser`), and its
+    :class:`SplEnv` core (TypeError for an env of another kind)."""
+    env = gym.make(args.env, **parse_overrides(args.set))
+    core = env.unwrapped
+    if not isinstance(core, SplEnv):
+        raise TypeError(f"expected an SplEnv, got {type(core).__name__}")
+    return env, core
+
+
 def main() -> None:
     parser = episodes_parser(__doc__, "ball_flatness")
     args = parser.parse_args()
     torch.set_num_threads(1)
     start = time.perf_counter()
-    env = gym.make(args.env, **parse_overrides(args.set))
-    core = env.unwrapped
-    if not isinstance(core, SplEnv):
-        raise TypeError(f"expected an SplEnv, got {type(core).__name__}")
+    env, core = made_env(args)
     pipeline = core.config.perception
     unjudged = dataclasses.replace(pipeline.cnn_ball, min_shading_std=None)
     detector = core.perception_context.cnn_detector(pipeline.cnn)

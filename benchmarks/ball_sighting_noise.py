@@ -31,22 +31,21 @@ from collections import defaultdict
 from pathlib import Path
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 import torch
 from ball_flatness import (
     camera_frames,
     camera_sightings,
     episodes_parser,
+    made_env,
 )  # benchmarks/ is the script's folder
 
 import spl_env  # noqa: F401  (registers the env ids)
-from agents.evaluate import load_policy, parse_overrides, played_steps
+from agents.evaluate import load_policy, played_steps
 from perception.geometry import invert, transform_points
 from perception.types import CameraModel, CameraState
 from perception.vision.cnn_ball import CnnBallConfig
 from perception.vision.ground_point import range_bearing_cov
-from spl_env.envs.core import SplEnv
 
 RESULTS = Path("benchmarks/results")
 OF_BALL_M = 0.5  # a sighting this near the true ball, plus ...
@@ -72,10 +71,7 @@ def variance_parts(
 
 def record(args: argparse.Namespace) -> list[dict[str, Any]]:
     """One row per sighting of the ball: camera, walking, true range, errors, variance parts."""
-    env = gym.make(args.env, **parse_overrides(args.set))
-    core = env.unwrapped
-    if not isinstance(core, SplEnv):
-        raise TypeError(f"expected an SplEnv, got {type(core).__name__}")
+    env, core = made_env(args)
     pipeline = core.config.perception
     config = pipeline.cnn_ball
     detector = core.perception_context.cnn_detector(pipeline.cnn)

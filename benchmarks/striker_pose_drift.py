@@ -26,13 +26,11 @@ import math
 import time
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
-from ball_flatness import episodes_parser  # benchmarks/ is the script's folder
+from ball_flatness import episodes_parser, made_env  # benchmarks/ is the script's folder
 
 import spl_env  # noqa: F401  (registers the env ids)
-from agents.evaluate import load_policy, parse_overrides, played_steps
-from spl_env.envs.core import SplEnv
+from agents.evaluate import load_policy, played_steps
 
 NEAR_M = 3.0  # the ball's error counts while it lies this near our robot (m), as the issue's
 AGENT = 0  # our robot's row in the world state
@@ -43,13 +41,10 @@ def main() -> None:
     parser = episodes_parser(__doc__, "striker_pose_drift", player="centre_kick")
     args = parser.parse_args()
     start = time.perf_counter()
-    env = gym.make(args.env, **parse_overrides(args.set))
-    core = env.unwrapped
-    if not isinstance(core, SplEnv):
-        raise TypeError(f"expected an SplEnv, got {type(core).__name__}")
+    env, core = made_env(args)
     dt = core.config.control_dt_s
     policy = load_policy(args.player, env.get_wrapper_attr("config"))
-    rows: list[tuple[float, ...]] = []  # per step: see COLUMNS
+    rows: list[tuple[float, ...]] = []  # per step: the columns summary() unpacks
     for seed in range(args.seed, args.seed + args.episodes):
         since = 0.0  # the start pose is known (the prior)
         for _, info in played_steps(env, policy, seed):
