@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from perception.geometry import FloatArray, camera_rotation
 from perception.sensor_models import LaserModel, SonarModel
-from perception.validation import check_finite, finite_vector
+from perception.validation import check_finite, check_in_interval, check_positive, finite_vector
 
 POLE_COLOURS: tuple[str, ...] = ("pink", "yellow", "blue", "green")
 
@@ -60,9 +60,7 @@ class PoleGeometry:
 
     def __post_init__(self) -> None:
         for name in ("radius_m", "base_top_m", "band_height_m"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"PoleGeometry.{name} must be finite and > 0, got {value}")
+            check_positive("PoleGeometry", name, getattr(self, name))
 
     @property
     def lower_centre_m(self) -> float:
@@ -99,8 +97,7 @@ class CameraModel:
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 16:
                 raise ValueError(f"CameraModel.{name} must be an int >= 16, got {value!r}")
-        if not (0.0 < self.hfov_deg < 180.0):
-            raise ValueError(f"CameraModel.hfov_deg must be in (0, 180), got {self.hfov_deg}")
+        check_in_interval("CameraModel", "hfov_deg", self.hfov_deg, 0.0, 180.0)
 
     @property
     def fx(self) -> float:

@@ -7,7 +7,6 @@ All numbers are metres in the field frame: origin at the centre spot, x towards 
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -15,7 +14,7 @@ import numpy as np
 from perception.field.dimensions import FieldDimensions
 from perception.geometry import FloatArray
 from perception.types import PoleCode, PoleGeometry
-from perception.validation import check_nested_configs
+from perception.validation import check_nested_configs, check_positive, check_reals
 
 __all__ = ["FieldDimensions", "PoleLayout"]
 
@@ -35,16 +34,8 @@ class PoleLayout:
 
     def __post_init__(self) -> None:
         check_nested_configs(self)
-        if len(self.x_positions_m) != 3:
-            raise ValueError(
-                f"PoleLayout.x_positions_m must hold 3 values, got {len(self.x_positions_m)}"
-            )
-        if not all(math.isfinite(x) for x in self.x_positions_m):
-            raise ValueError(f"PoleLayout.x_positions_m must be finite, got {self.x_positions_m}")
-        if not (math.isfinite(self.offset_outside_m) and self.offset_outside_m > 0):
-            raise ValueError(
-                f"PoleLayout.offset_outside_m must be finite and > 0, got {self.offset_outside_m}"
-            )
+        check_reals("PoleLayout", "x_positions_m", self.x_positions_m, 3)
+        check_positive("PoleLayout", "offset_outside_m", self.offset_outside_m)
 
     def codes(self) -> tuple[PoleCode, ...]:
         """The six pole codes, ids 0..5: left side pink-over-colour, right side colour-over-pink."""

@@ -88,7 +88,13 @@ from scipy.ndimage import grey_closing, median_filter
 
 from perception.geometry import FloatArray, pixel_rays, project_points, ray_ground_intersection
 from perception.types import CameraModel, CameraState, RobotSighting
-from perception.validation import check_in_interval, check_int, check_positive, check_rgb_image
+from perception.validation import (
+    check_in_interval,
+    check_int,
+    check_positive,
+    check_reals,
+    check_rgb_image,
+)
 from perception.vision.colour_filter import HsvRange, check_hsv_range
 from perception.vision.field_pixels import (
     best_splits,
@@ -206,13 +212,9 @@ class RobotDetectorConfig:
             check_int(_OWNER, name, getattr(self, name), 1)
         check_int(_OWNER, "bottom_margin_px", self.bottom_margin_px, 0)
         check_int(_OWNER, "side_margin_px", self.side_margin_px, 0)
+        check_reals(_OWNER, "width_ratio", self.width_ratio, 2)
         lo, hi = self.width_ratio
-        if not (
-            isinstance(self.width_ratio, tuple)
-            and len(self.width_ratio) == 2
-            and math.isfinite(hi)
-            and 0.0 < lo < hi
-        ):
+        if not 0.0 < lo < hi:
             raise ValueError(
                 f"{_OWNER}.width_ratio must be (lo, hi) with 0 < lo < hi, got {self.width_ratio}"
             )

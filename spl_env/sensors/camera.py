@@ -16,7 +16,13 @@ from numpy.typing import NDArray
 
 from perception.geometry import FloatArray
 from perception.types import CameraModel
-from perception.validation import check_bool, check_nested_configs, check_positive
+from perception.validation import (
+    check_bool,
+    check_in_interval,
+    check_nested_configs,
+    check_positive,
+    check_reals,
+)
 from spl_env.sim.world import BulletWorld, Lighting
 
 
@@ -35,21 +41,22 @@ class LightingRandomisation:
     )  # added brightness (fraction of 255) facing it
 
     def __post_init__(self) -> None:
+        owner = "LightingRandomisation"
         for name in ("ambient", "diffuse", "exposure", "window_strength"):
+            check_reals(owner, name, getattr(self, name), 2)
             lo, hi = getattr(self, name)
-            if not (math.isfinite(lo) and math.isfinite(hi) and 0 <= lo <= hi):
-                raise ValueError(
-                    f"LightingRandomisation.{name} must be 0 <= lo <= hi, got {(lo, hi)}"
-                )
-        if not 0 <= self.colour_jitter < 1:
-            raise ValueError(
-                f"LightingRandomisation.colour_jitter must be in [0, 1), got {self.colour_jitter}"
-            )
-        if not 0 <= self.window_probability <= 1:
-            raise ValueError(
-                "LightingRandomisation.window_probability must be in [0, 1], "
-                f"got {self.window_probability}"
-            )
+            if not 0 <= lo <= hi:
+                raise ValueError(f"{owner}.{name} must be 0 <= lo <= hi, got {(lo, hi)}")
+        check_in_interval(owner, "colour_jitter", self.colour_jitter, 0.0, 1.0, low_inclusive=True)
+        check_in_interval(
+            owner,
+            "window_probability",
+            self.window_probability,
+            0.0,
+            1.0,
+            low_inclusive=True,
+            high_inclusive=True,
+        )
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -535,7 +535,8 @@ class BulletWorld:
 
     def restore_state(self, state_id: int) -> None:
         """Return to a snapshot from :meth:`save_state`, forgetting the contacts Bullet cached
-        since (:meth:`_forget_contacts`)."""
+        since (:meth:`_forget_contacts`; a dynamic body's orientation comes back within a
+        rounding, the same one every time)."""
         p.restoreState(stateId=state_id, physicsClientId=self.client)
         self._forget_contacts()
         self._disturbed = True

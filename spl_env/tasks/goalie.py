@@ -55,6 +55,15 @@ class GoalieTaskConfig(SoccerTaskConfig):
         check_positive(owner, "save_reward", self.save_reward, allow_zero=True)
 
 
+def farthest_shot_m(context: TaskContext) -> float:
+    """The largest ``shot_distance_m`` (m) that keeps the ball inside the touch lines and the
+    kicker, up to ``KICKER_BEHIND_M[1]`` farther out, on the carpet clear of its edge, for every
+    shot angle."""
+    dims, sine = context.dimensions, math.sin(SHOT_ANGLE_MAX_RAD)
+    carpet_half_width = dims.carpet_size_m[1] / 2 - context.robot.body_radius_m
+    return min(dims.half_width_m / sine, carpet_half_width / sine - KICKER_BEHIND_M[1])
+
+
 class GoalieTask(SoccerTask):
     """Our robot starts on its goal line (at -x) facing the field; the ball lies
     ``shot_distance_m`` out in front of the goal; the kicker (the first scripted robot, the
@@ -71,14 +80,13 @@ class GoalieTask(SoccerTask):
 
     def __init__(self, config: GoalieTaskConfig, context: TaskContext) -> None:
         super().__init__(config, context)
-        farthest = config.shot_distance_m[1]
-        half_width = context.dimensions.half_width_m
-        if farthest * math.sin(SHOT_ANGLE_MAX_RAD) > half_width:
+        limit = farthest_shot_m(context)
+        if config.shot_distance_m[1] > limit:
             raise ValueError(
                 f"{type(config).__name__}.shot_distance_m must keep the ball inside the touch "
-                f"lines at {math.degrees(SHOT_ANGLE_MAX_RAD):.0f} degrees off the goal's axis: "
-                f"high <= {half_width / math.sin(SHOT_ANGLE_MAX_RAD):.2f} m, got "
-                f"{config.shot_distance_m}"
+                f"lines and the kicker behind it on the carpet at "
+                f"{math.degrees(SHOT_ANGLE_MAX_RAD):.0f} degrees off the goal's axis: high <= "
+                f"{math.floor(100 * limit) / 100:.2f} m, got {config.shot_distance_m}"
             )
         self._target = np.zeros(2)
         self._shot = ShotWatch(config)

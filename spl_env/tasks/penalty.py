@@ -59,7 +59,7 @@ class PenaltyTask(StrikerTask):
             "goalie_max_offset_m",
             config.goalie_max_offset_m,
             allow_zero=True,
-            upper=dims.goal_inner_width_m / 2,  # the goalie stands in its goal
+            upper=dims.goal_inner_width_m / 2 - context.robot.body_radius_m,  # in its goal
             upper_inclusive=True,
         )
         self._shot = ShotWatch(config)

@@ -18,12 +18,16 @@ import pytest
 
 import spl_env  # noqa: F401  (registers the env ids)
 from perception.pipeline import PipelineConfig
+from perception.types import CameraModel
+from perception.vision.robots import RobotDetectorConfig
 from spl_env.config import SPL_ALIASES, EnvConfig
 from spl_env.envs.active_vision import ACTIVE_VISION_ALIASES, ActiveVisionConfig
 from spl_env.envs.look_around import LookAroundConfig
+from spl_env.field import PoleLayout
 from spl_env.overrides import apply_overrides
 from spl_env.robots.nao import RobotConfig
 from spl_env.scenes.spl_field import SceneConfig
+from spl_env.sensors.camera import LightingRandomisation
 from spl_env.sensors.laser import LaserConfig
 from spl_env.sensors.odometry import OdometryConfig
 from spl_env.sensors.rig import RigConfig
@@ -359,6 +363,19 @@ def test_env_config_validates_when_built_directly() -> None:
         (lambda: SceneConfig(boards_enabled=1), r"SceneConfig\.boards_enabled must be a bool"),
         (lambda: EnvConfig(info_timing="yes"), r"EnvConfig\.info_timing must be a bool"),
         (lambda: EnvConfig(control_dt_s="0.1"), r"EnvConfig\.control_dt_s must be a real number"),
+        (lambda: CameraModel(hfov_deg="60"), r"CameraModel\.hfov_deg must be a real number"),
+        (
+            lambda: LightingRandomisation(ambient=None),
+            r"LightingRandomisation\.ambient must be a tuple of 2 real numbers",
+        ),
+        (
+            lambda: PoleLayout(x_positions_m=None),
+            r"PoleLayout\.x_positions_m must be a tuple of 3 real numbers",
+        ),
+        (
+            lambda: RobotDetectorConfig(width_ratio=None),
+            r"RobotDetectorConfig\.width_ratio must be a tuple of 2 real numbers",
+        ),
         (
             lambda: EnvConfig(robot=RobotConfig(max_speed=(0.25,))),
             r"RobotConfig\.max_speed must be a tuple of 3 real numbers, got tuple",

@@ -374,12 +374,13 @@ def test_the_scripted_head_looks_again_at_a_waiting_sighting() -> None:
     [
         # an infinite bound crashed numpy's draw; the ball would start beyond the touch lines
         ("SPL/Goalie-v0", {"task.shot_distance_m": (1.5, math.inf)}, r"shot_distance_m\[1\]"),
-        ("SPL/Goalie-v0", {"task.shot_distance_m": (1.5, 4.0)}, r"shot_distance_m.*<= 3\.83"),
+        # ... or the kicker, up to 1 m behind it, beyond the carpet's edge (less its body)
+        ("SPL/Goalie-v0", {"task.shot_distance_m": (1.5, 3.6)}, r"shot_distance_m.*<= 3\.53 m"),
         ("SPL/Goalie-v0", {"task.shot_distance_m": (30.0, 40.0)}, r"inside the touch lines"),
         # our robot would start behind our own goal line (7.7 m = 9 m - 1.3 m from it)
         ("SPL/PenaltyShootout-v0", {"task.start_behind_ball_m": 20.0}, r"\(0, 7\.7\]"),
-        # the goalie would stand beside its goal (half its 1.5 m inner width)
-        ("SPL/PenaltyShootout-v0", {"task.goalie_max_offset_m": 10.0}, r"\[0, 0\.75\]"),
+        # the goalie would stand beside its goal (half its 1.5 m inner width less its body)
+        ("SPL/PenaltyShootout-v0", {"task.goalie_max_offset_m": 0.7}, r"\[0, 0\.6\]"),
         # head targets beyond the joints were clipped to them silently
         ("SPL/Striker-v0", {"task.scan_pitch_rad": 3.0}, r"scan_pitch_rad must be finite and in"),
         ("SPL/Striker-v0", {"task.scan_amplitude_rad": 100.0}, r"scan_amplitude_rad.*2\.0856"),

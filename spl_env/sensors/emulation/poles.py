@@ -23,7 +23,7 @@ import numpy as np
 
 from perception.geometry import FloatArray, project_points
 from perception.types import CameraModel, CameraState, LandmarkObservation, PoleGeometry
-from perception.validation import check_in_interval, check_positive
+from perception.validation import check_in_interval, check_positive, check_reals
 from perception.vision.colour_filter import ColourPoleDetector
 from spl_env.robots.nao import NaoRobot
 from spl_env.scenes.spl_field import SplFieldScene
@@ -76,10 +76,15 @@ class GeometricCameraConfig:
 
     def __post_init__(self) -> None:
         owner = "GeometricCameraConfig"
-        if not self.recall_by_smear:
-            raise ValueError(f"{owner}.recall_by_smear needs at least one (bound, recall) pair")
+        if not isinstance(self.recall_by_smear, tuple) or not self.recall_by_smear:
+            raise ValueError(
+                f"{owner}.recall_by_smear needs a tuple of (bound, recall) pairs, at least one, "
+                f"got {self.recall_by_smear!r}"
+            )
         previous = 0.0
-        for k, (bound, recall) in enumerate(self.recall_by_smear):
+        for k, pair in enumerate(self.recall_by_smear):
+            check_reals(owner, f"recall_by_smear[{k}]", pair, 2)
+            bound, recall = pair
             # bounds finite, positive and increasing: each in (the previous bound, inf)
             check_in_interval(owner, f"recall_by_smear[{k}] bound", bound, previous, math.inf)
             check_in_interval(
