@@ -35,7 +35,7 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import torch
-from ball_flatness import episodes_parser  # benchmarks/ is the script's folder
+from ball_flatness import episodes_parser, written_result  # benchmarks/ is the script's folder
 
 import spl_env  # noqa: F401  (registers the env ids)
 from agents.evaluate import load_policy, parse_overrides, played_steps
@@ -89,11 +89,7 @@ def main() -> None:
             field.append(float(np.hypot(*(truth["ball"] - belief["ball"]))))
     env.close()
     total = sum(relative)
-    result = {
-        "env_id": args.env,
-        "player": args.player,
-        "seeds": [args.seed, args.seed + args.episodes - 1],
-        "overrides": args.set,
+    measured = {
         "steps": len(relative),
         "relative_error_m": {
             "mean": float(np.mean(relative)),
@@ -112,10 +108,8 @@ def main() -> None:
             }
             for kind in CLASSES
         },
-        "run_s": time.perf_counter() - start,
     }
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / f"{args.name}.json").write_text(json.dumps(result, indent=1))
+    result = written_result(args, args.player, measured, start)
     keys = ("relative_error_m", "field_error_mean_m", "unbelieved_share")
     print(json.dumps({k: result[k] for k in keys}))
     for kind, c in result["classes"].items():

@@ -21,7 +21,6 @@ Writes ``ball_detection_near_robots.json`` (``--name``) to ``--out`` (``benchmar
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import time
 from pathlib import Path
@@ -29,7 +28,11 @@ from typing import Any
 
 import numpy as np
 import torch
-from ball_flatness import episodes_parser, made_env  # benchmarks/ is the script's folder
+from ball_flatness import (  # benchmarks/ is the script's folder
+    episodes_parser,
+    made_env,
+    written_result,
+)
 
 import spl_env  # noqa: F401  (registers the env ids)
 from agents.evaluate import load_policy, played_steps
@@ -120,11 +123,7 @@ def main() -> None:
     start = time.perf_counter()
     counts = record(args)
     by_robot = counts.sum(axis=0)
-    result = {
-        "env_id": args.env,
-        "player": args.player,
-        "seeds": [args.seed, args.seed + args.episodes - 1],
-        "overrides": args.set,
+    measured = {
         "bands": summary(counts),
         "by_nearest_robot": [
             {
@@ -135,10 +134,8 @@ def main() -> None:
             }
             for j in range(by_robot.shape[0])
         ],
-        "run_s": time.perf_counter() - start,
     }
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / f"{args.name}.json").write_text(json.dumps(result, indent=1))
+    result = written_result(args, args.player, measured, start)
     for row in result["by_nearest_robot"]:
         print(row)
 

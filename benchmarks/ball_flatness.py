@@ -145,6 +145,25 @@ def made_env(args: argparse.Namespace) -> tuple[gym.Env, SplEnv]:
     return env, core
 
 
+def written_result(
+    args: argparse.Namespace, player: str, measured: dict[str, Any], start_s: float
+) -> dict[str, Any]:
+    """The result of an episodes benchmark (:func:`episodes_parser`): its run (env, seeds,
+    ``player``, overrides), ``measured`` and the seconds since ``start_s``
+    (``time.perf_counter``); written to ``--out``/``--name``.json and returned."""
+    result = {
+        "env_id": args.env,
+        "seeds": [args.seed, args.seed + args.episodes - 1],
+        "player": player,
+        "overrides": args.set,
+        **measured,
+        "run_s": time.perf_counter() - start_s,
+    }
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / f"{args.name}.json").write_text(json.dumps(result, indent=1))
+    return result
+
+
 def main() -> None:
     parser = episodes_parser(__doc__, "ball_flatness")
     args = parser.parse_args()
@@ -169,17 +188,11 @@ def main() -> None:
                     shading[f"{name}/{label}"].append(value)
     env.close()
     floor = CnnBallConfig().min_shading_std  # the default check's, whatever the env ran with
-    result = {
-        "env_id": args.env,
-        "seeds": [args.seed, args.seed + args.episodes - 1],
-        "player": "centre_kick",
-        "overrides": args.set,
+    measured = {
         "min_shading_std": floor,
         "by_camera_and_label": {k: summary(v, floor) for k, v in sorted(shading.items())},
-        "run_s": time.perf_counter() - start,
     }
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / f"{args.name}.json").write_text(json.dumps(result, indent=1))
+    result = written_result(args, "centre_kick", measured, start)
     print(json.dumps(result["by_camera_and_label"], indent=1))
 
 

@@ -24,7 +24,6 @@ Writes ``ball_sighting_noise.json`` (``--name``) to ``--out`` (``benchmarks/resu
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import time
 from collections import defaultdict
@@ -38,6 +37,7 @@ from ball_flatness import (
     camera_sightings,
     episodes_parser,
     made_env,
+    written_result,
 )  # benchmarks/ is the script's folder
 
 import spl_env  # noqa: F401  (registers the env ids)
@@ -171,17 +171,11 @@ def main() -> None:
         span = f"{lo:g}-{BANDS_M[band + 1]:g} m" if band + 1 < len(BANDS_M) else f"{lo:g}+ m"
         motion = "walking" if r["walking"] else "standing"
         groups[f"{r['camera']}/{motion}/{span}"].append(r)
-    result = {
-        "env_id": args.env,
-        "seeds": [args.seed, args.seed + args.episodes - 1],
-        "player": "centre_kick",
-        "overrides": args.set,
+    measured = {
         "fit": fitted,
         "bands": {k: band_summary(v, tilt) for k, v in sorted(groups.items())},
-        "run_s": time.perf_counter() - start,
     }
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / f"{args.name}.json").write_text(json.dumps(result, indent=1))
+    result = written_result(args, "centre_kick", measured, start)
     print(f"tilt std {tilt} rad from {fitted['count']} sightings")
     for key, summary in result["bands"].items():
         print(

@@ -27,7 +27,11 @@ import time
 from typing import Any
 
 import numpy as np
-from ball_flatness import episodes_parser, made_env  # benchmarks/ is the script's folder
+from ball_flatness import (  # benchmarks/ is the script's folder
+    episodes_parser,
+    made_env,
+    written_result,
+)
 
 import spl_env  # noqa: F401  (registers the env ids)
 from agents.evaluate import load_policy, played_steps
@@ -68,18 +72,8 @@ def main() -> None:
                 )
             )
     env.close()
-    result = {
-        "env": args.env,
-        "player": args.player,
-        "seeds": [args.seed, args.seed + args.episodes - 1],
-        "overrides": args.set,
-        **summary(np.array(rows)),
-        "run_s": time.perf_counter() - start,
-    }
-    args.out.mkdir(parents=True, exist_ok=True)
-    path = args.out / f"{args.name}.json"
-    path.write_text(json.dumps(result, indent=2))
-    print(json.dumps(result, indent=2))
+    result = written_result(args, args.player, summary(np.array(rows)), start)
+    print(json.dumps(result, indent=1))
 
 
 def summary(rows: np.ndarray) -> dict[str, Any]:

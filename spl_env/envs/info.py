@@ -180,8 +180,8 @@ def ball_info(ball: BallEstimate, layout: InfoLayout) -> dict[str, Any]:
     """The believed ball (field frame): ``ball`` (2,) position (m), ``ball_velocity`` (2,)
     (m/s), ``ball_cov`` (4, 4) over both, ``ball_relative`` (2,) its position in our robot's
     frame (m; the filter's own estimate, free of the pose's error), ``ball_known`` (a ball is
-    believed: seen, and not lost since) and ``ball_last_seen_s`` (s; -1 before the first
-    sighting: -inf would not survive JSON)."""
+    believed: seen, and not lost since) and ``ball_last_seen_s``
+    (s; -1 before the first sighting: -inf would not survive JSON)."""
     return {
         "ball": ball.state[:2].copy(),
         "ball_relative": ball.relative[:2].copy(),

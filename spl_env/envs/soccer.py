@@ -4,9 +4,8 @@ Each is also registered without poles (``SPL/Striker-NoPoles-v0`` and so on:
 :data:`spl_env.NO_POLES_KWARGS`, the pose from the field's features). Our robot's body is the
 action (where to walk, when and where to kick); the head is scripted (looks at the believed
 ball, or at a first sighting awaiting a second, scans when it is lost) or, with
-``head_control="action"``, part of the action. Every
-observation key is what perception believes; the scripted opponents and the rewards use the
-truth.
+``head_control="action"``, part of the action. Every observation key is what perception
+believes; the scripted opponents and the rewards use the truth.
 """
 
 from __future__ import annotations
@@ -19,6 +18,7 @@ from spl_env.config import SPL_ALIASES, EnvConfig
 from spl_env.envs.core import SplEnv
 from spl_env.tasks.goalie import GoalieTask, GoalieTaskConfig
 from spl_env.tasks.penalty import PenaltyTask, PenaltyTaskConfig
+from spl_env.tasks.soccer import SoccerTaskConfig, check_head_reach
 from spl_env.tasks.striker import StrikerTask, StrikerTaskConfig
 
 SOCCER_ALIASES: dict[str, str] = {
@@ -67,7 +67,8 @@ class SoccerConfig(EnvConfig):
     """:class:`spl_env.config.EnvConfig` whose ball is seen by both cameras (the top camera
     cannot see a ball nearer than about 0.35 m: the feet, where it is kicked) and whose robot
     tracks outlive 5 s unseen (the head follows the ball: a goalie seen during the run-up is
-    still known at the kick)."""
+    still known at the kick). The scripted head's scan and glance must stay within the
+    robot's head joints."""
 
     perception: PipelineConfig = field(
         default_factory=lambda: PipelineConfig(
@@ -75,6 +76,11 @@ class SoccerConfig(EnvConfig):
             robot_tracker=RobotTrackerConfig(drop_after_s=5.0),
         )
     )
+    task: SoccerTaskConfig = field(default_factory=SoccerTaskConfig)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_head_reach(self.task, self.robot)
 
 
 @dataclass(frozen=True, kw_only=True)

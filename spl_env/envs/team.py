@@ -86,7 +86,6 @@ from spl_env.tasks.soccer import (
     SoccerTaskConfig,
     ball_in_goal,
     ball_out,
-    check_head_reach,
     goal_centre,
     soccer_command,
 )
@@ -152,7 +151,6 @@ class TeamConfig(SoccerConfig):
         super().__post_init__()
         if self.sensors.laser is not None:
             raise ValueError("TeamConfig.sensors.laser must be None: the team's Naos have none")
-        check_head_reach(self.task, self.robot)
 
 
 def mirror_observation(obs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:

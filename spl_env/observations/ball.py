@@ -27,8 +27,8 @@ class BallEncoder:
     ``ball_bearing`` (2,) cos and sin of its bearing, ``ball_range`` (1,) r / (r + 3 m),
     ``ball_velocity`` (2,) each robot-frame component v / (|v| + 0.3 m/s), ``ball_std`` (1,)
     s / (s + 0.5 m) with s = sqrt(trace of its position covariance), ``ball_since_seen`` (1,)
-    t / (t + 2 s). While no ball is believed (before its first sighting, or once the filter lost
-    it): bearing (1, 0), range, velocity 0, std and since-seen 1.
+    t / (t + 2 s). While no ball is believed (before its first sighting, or once the filter
+    lost it): bearing (1, 0), range, velocity 0, std and since-seen 1.
     """
 
     requires: tuple[str, ...] = (BALL,)

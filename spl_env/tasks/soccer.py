@@ -113,7 +113,7 @@ class SoccerTaskConfig(TaskConfig):
                 f"{owner}.glance_s must be <= glance_period_s, got {self.glance_s} and "
                 f"{self.glance_period_s}"
             )
-        check_finite(owner, "scan_pitch_rad", self.scan_pitch_rad)  # the head's joints: the task
+        check_finite(owner, "scan_pitch_rad", self.scan_pitch_rad)  # its joints': check_head_reach
         check_int(owner, "max_tracked_robots", self.max_tracked_robots, 1)
         check_positive(owner, "goal_reward", self.goal_reward, allow_zero=True)
         for name in ("kicked_speed_mps", "stopped_speed_mps"):
@@ -269,7 +269,6 @@ class SoccerTask(Task):
 
     def __init__(self, config: SoccerTaskConfig, context: TaskContext) -> None:
         super().__init__(config, context)
-        check_head_reach(config, context.robot)
         self._belief: PerceptionOutput | None = None
 
     @property
