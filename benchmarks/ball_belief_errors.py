@@ -91,12 +91,12 @@ def main() -> None:
     total = sum(relative)
     measured = {
         "steps": len(relative),
-        "relative_error_m": {
-            "mean": float(np.mean(relative)),
-            "median": float(np.median(relative)),
-            "p95": float(np.percentile(relative, 95)),
+        "relative_error_m": {  # None where no step counted (no ball believed near)
+            "mean": float(np.mean(relative)) if relative else None,
+            "median": float(np.median(relative)) if relative else None,
+            "p95": float(np.percentile(relative, 95)) if relative else None,
         },
-        "field_error_mean_m": float(np.mean(field)),
+        "field_error_mean_m": float(np.mean(field)) if field else None,
         "unbelieved_steps": unbelieved,
         "unbelieved_share": unbelieved / max(unbelieved + len(relative), 1),
         "classes": {
