@@ -307,7 +307,8 @@ class RobotCandidate:
     ``box`` (4,) ``(u0, v0, u1, v1)`` its pixel edges after shrinking (camera coordinates);
     ``base`` (2,) the pixel its range was measured at (the base or, for a cut-off robot, the
     waistband's lower edge); ``cut`` whether the base lies at the image bottom; ``team`` the
-    waistband colour's team or None; ``rejected`` the :data:`REJECTIONS` entry that dropped it
+    waistband colour's team or None (None too for a box rejected by its width before the
+    colour was searched); ``rejected`` the :data:`REJECTIONS` entry that dropped it
     or None; ``sighting`` the sighting when it was kept.
     """
 
@@ -687,6 +688,10 @@ class RobotDetector:
                     for a, b in parts
                     for c in self._examine(colours, state, boundary, a, b, split=False)
                 ]
+        if not cut:  # ranged at its base whatever the colours: its width is judged first
+            too = self._width_rejection(width_px, depth, u0, u1, wide_test=True)
+            if too is not None:
+                return reject(too)
         # lines 6-7: the waistband's colour, searched where a standing robot shows its body
         waist = self._waistband(colours.hsv, state, at_base, (u0, u1), v1, cut, depth)
         team = None if waist is None else waist[0]
@@ -706,20 +711,11 @@ class RobotDetector:
         def verdict(reason: str) -> list[RobotCandidate]:
             return [RobotCandidate(box, pixel, cut, team, reason, None)]
 
-        # line 4, at the range found (a robot cut off at the bottom without a waistband stands
-        # nearer than its base says: it may be wider)
-        lo, hi = cfg.width_ratio
         if depth <= 0:
             return verdict("above_horizon")
-        if width_px < lo * cam.fx * cfg.robot_width_m / depth:
-            return verdict("too_narrow")
-        # not in the seed: a robot cut by the image's side shows a part whose base and centre
-        # are not the robot's
-        at_side = u0 <= cfg.side_margin_px or u1 >= cam.width - 1 - cfg.side_margin_px
-        if at_side and width_px < cfg.side_min_ratio * cam.fx * cfg.robot_width_m / depth:
-            return verdict("cut_at_side")
-        if (pixel is not base or not cut) and width_px > hi * cam.fx * cfg.robot_width_m / depth:
-            return verdict("too_wide")
+        too = self._width_rejection(width_px, depth, u0, u1, pixel is not base or not cut)
+        if too is not None:
+            return verdict(too)
         # line 12: too narrow in metres (rows' widths: a leaning edge widens the box, not a row)
         width_m = row_width_px * depth / cam.fx
         if width_m < cfg.min_width_m:
@@ -742,6 +738,25 @@ class RobotDetector:
             range_m=float(range_m), bearing_rad=float(bearing), cov=cov, team=team, box=box
         )
         return [RobotCandidate(box, pixel, cut, team, None, sighting)]
+
+    def _width_rejection(
+        self, width_px: float, depth: float, u0: int, u1: int, wide_test: bool
+    ) -> str | None:
+        """Algorithm 2 line 4 for a box over columns ``u0..u1``, ``width_px`` wide, at
+        ``depth`` (m, > 0): ``"too_narrow"``, ``"cut_at_side"`` (not in the seed: a robot cut by
+        the image's side shows a part whose base and centre are not the robot's) or, with
+        ``wide_test`` (not for a robot cut off at the bottom without a waistband: it stands
+        nearer than its base says, so it may be wider), ``"too_wide"``; None when it passes."""
+        cfg, cam = self.config, self.camera
+        (lo, hi), robot_m = cfg.width_ratio, cfg.robot_width_m
+        if width_px < lo * cam.fx * robot_m / depth:
+            return "too_narrow"
+        at_side = u0 <= cfg.side_margin_px or u1 >= cam.width - 1 - cfg.side_margin_px
+        if at_side and width_px < cfg.side_min_ratio * cam.fx * robot_m / depth:
+            return "cut_at_side"
+        if wide_test and width_px > hi * cam.fx * robot_m / depth:
+            return "too_wide"
+        return None
 
     def _waistband(
         self,
