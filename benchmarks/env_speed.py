@@ -11,6 +11,14 @@ shared CPU falls on all of them alike: ``geometric_over_rendered`` (the geometri
 steps per second over the rendered one's) compares like with like. Also the wall time of the
 first ``env.reset()`` (the first episode start, e.g. the CNN's first pass) and the mean of
 ``--resets`` later ones (what each new episode costs).
+
+``--block N`` steps each env N steps in a row before the next takes its turn (default 1: one
+step each, as above). Step by step, every geometric step follows a rendered one, which has
+filled the CPU's caches with the frame's buffers, so the geometric env is measured slower than
+it runs on its own, as in training. Blocks of 50 steps keep that out while the load of other
+jobs still falls on every setting alike (which setting goes first rotates per block).
+
+    python benchmarks/env_speed.py --block 50 --out benchmarks/results/env_speed_blocks.json
 """
 
 from __future__ import annotations
@@ -39,26 +47,32 @@ def _timed_reset(env: gym.Env, seed: int) -> float:
 
 
 def measure(
-    env_id: str, steps: int, resets: int, seed: int, settings: tuple[dict[str, Any], ...]
+    env_id: str,
+    steps: int,
+    resets: int,
+    seed: int,
+    settings: tuple[dict[str, Any], ...],
+    block: int = 1,
 ) -> list[dict[str, Any]]:
     """Time the first reset of each setting's env, ``steps`` env steps after it (the settings
-    in turn), then ``resets`` later resets of each."""
+    in turn, ``block`` steps each), then ``resets`` later resets of each."""
     envs = [gym.make(env_id, info_timing=True, **o) for o in settings]
     actions = envs[0].action_space
     actions.seed(seed)
     first_reset_s = [_timed_reset(env, seed) for env in envs]
     totals = [dict.fromkeys(PARTS, 0.0) for _ in envs]
     step_s: list[list[float]] = [[] for _ in envs]
-    for k in range(steps):
-        action = actions.sample()
-        for i in np.roll(np.arange(len(envs)), k):
-            t0 = time.perf_counter()
-            *_, terminated, truncated, info = envs[i].step(action)
-            step_s[i].append(time.perf_counter() - t0)
-            for part in PARTS:
-                totals[i][part] += info["timing"][part]
-            if terminated or truncated:
-                envs[i].reset()
+    for k0 in range(0, steps, block):
+        block_actions = [actions.sample() for _ in range(min(block, steps - k0))]
+        for i in np.roll(np.arange(len(envs)), k0 // block):
+            for action in block_actions:
+                t0 = time.perf_counter()
+                *_, terminated, truncated, info = envs[i].step(action)
+                step_s[i].append(time.perf_counter() - t0)
+                for part in PARTS:
+                    totals[i][part] += info["timing"][part]
+                if terminated or truncated:
+                    envs[i].reset()
     later_reset_s = [[_timed_reset(env, seed + 1 + k) for k in range(resets)] for env in envs]
     for env in envs:
         env.close()
@@ -106,6 +120,7 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=300)
     parser.add_argument("--resets", type=int, default=5, help="later resets timed")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--block", type=int, default=1, help="steps per env per turn")
     parser.add_argument("--out", type=Path, default=Path("benchmarks/results/env_speed.json"))
     args = parser.parse_args()
     settings: tuple[dict[str, Any], ...] = (
@@ -113,9 +128,12 @@ def main() -> None:
         {"randomise_lighting": True},
         {"camera_mode": "geometric", "frontend": "colour"},
     )
-    runs = measure(args.env, args.steps, args.resets, args.seed, settings)
+    if args.block < 1:
+        parser.error(f"--block must be at least 1, got {args.block}")
+    runs = measure(args.env, args.steps, args.resets, args.seed, settings, args.block)
     result = {
         "machine": {"cpu_count": os.cpu_count(), "python": platform.python_version()},
+        "block": args.block,
         "runs": runs,
         "geometric_over_rendered": runs[2]["steps_per_second"] / runs[0]["steps_per_second"],
     }
