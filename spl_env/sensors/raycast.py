@@ -5,12 +5,13 @@ The PyBullet world provides it behind ``rayTestBatch``; tests provide closed-for
 
 from __future__ import annotations
 
+import math
 from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from perception.geometry import FloatArray, transform_points
+from perception.geometry import FloatArray
 
 
 class RayCaster(Protocol):
@@ -42,8 +43,9 @@ class RayFan:
         local_ends = np.column_stack(
             [mount_x_m + length_m * np.cos(angles), length_m * np.sin(angles)]
         )
-        # (N + 1, 2) robot-frame points: the sensor, then each ray's end
-        self._local = np.vstack([[[mount_x_m, 0.0]], local_ends])
+        # (N + 1,) robot-frame x and y of the sensor, then of each ray's end
+        local = np.vstack([[[mount_x_m, 0.0]], local_ends])
+        self._local_x, self._local_y = local[:, 0].copy(), local[:, 1].copy()
         # (N, 3) field-frame rays' template: x and y filled in per pose, z the mount's height
         self._template = np.full((len(angles), 3), float(mount_height_m))
 
@@ -51,12 +53,15 @@ class RayFan:
         """The rays as (N, 3) field-frame starts and ends (m) from the robot at ``robot_pose``,
         the (3,) field pose ``(x, y, theta)``."""
         pose = np.asarray(robot_pose, dtype=np.float64)
-        if pose.shape != (3,) or not np.all(np.isfinite(pose)):
+        if pose.shape != (3,) or not all(math.isfinite(v) for v in pose.tolist()):
             raise ValueError(f"robot_pose must be a finite (3,) pose (x, y, theta), got {pose!r}")
-        points = transform_points(pose, self._local)
+        x, y, theta = pose  # the sums of :func:`perception.geometry.transform_points`
+        c, s = np.cos(theta), np.sin(theta)
+        lx, ly = self._local_x, self._local_y
+        field_x, field_y = x + c * lx - s * ly, y + s * lx + c * ly
         starts, ends = self._template.copy(), self._template.copy()
-        starts[:, :2] = points[0]
-        ends[:, :2] = points[1:]
+        starts[:, 0], starts[:, 1] = field_x[0], field_y[0]
+        ends[:, 0], ends[:, 1] = field_x[1:], field_y[1:]
         return starts, ends
 
 

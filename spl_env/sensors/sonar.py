@@ -97,27 +97,31 @@ class Sonar:
         """
         starts, ends = self.rays(robot_pose)
         distances, bodies = cast(ray_caster, starts, ends, ignore_body)
-        m = self.model
-        n = self.config.rays_per_sector
+        m, n = self.model, self.config.rays_per_sector
+        ranges, hit = distances.tolist(), bodies.tolist()  # floats: 31 rays a sector
         out = np.full((N_SONAR_SECTORS, m.max_echoes), np.nan)
         for sector in range(N_SONAR_SECTORS):
             rows = slice(sector * n, (sector + 1) * n)
-            true_echoes = merge_echoes(
-                surface_echoes(distances[rows], bodies[rows]), m.echo_merge_m
-            )
-            if not len(true_echoes):  # silence: no echo, and no noise to draw
+            true_echoes = _merged(_surfaces(ranges[rows], hit[rows]), m.echo_merge_m)
+            if not true_echoes:  # silence: no echo, and no noise to draw
                 continue
             echoes = self._noisy(true_echoes, rng)
             out[sector, : len(echoes)] = echoes
         return out
 
-    def _noisy(self, echoes: FloatArray, rng: np.random.Generator) -> FloatArray:
-        """Add noise and dropouts to true echo distances; keep at most ``max_echoes`` in range."""
+    def _noisy(self, echoes: list[float], rng: np.random.Generator) -> list[float]:
+        """Add noise and dropouts to true echo distances; keep at most ``max_echoes`` in range,
+        nearest first."""
         m = self.model
-        noisy = echoes + m.range_noise_std_m * rng.standard_normal(len(echoes))
-        kept = rng.random(len(echoes)) >= self.config.dropout_probability
-        kept &= (noisy >= m.min_range_m) & (noisy <= m.max_range_m)
-        return np.sort(noisy[kept])[: m.max_echoes]
+        noise = rng.standard_normal(len(echoes)).tolist()
+        draws = rng.random(len(echoes)).tolist()
+        noisy = [e + m.range_noise_std_m * z for e, z in zip(echoes, noise, strict=True)]
+        kept = [
+            r
+            for r, u in zip(noisy, draws, strict=True)
+            if u >= self.config.dropout_probability and m.min_range_m <= r <= m.max_range_m
+        ]
+        return sorted(kept)[: m.max_echoes]
 
 
 def surface_echoes(distances: ArrayLike, bodies: ArrayLike) -> FloatArray:
@@ -127,11 +131,21 @@ def surface_echoes(distances: ArrayLike, bodies: ArrayLike) -> FloatArray:
     hit (-1 = none), in angular order; a surface is a run of consecutive rays on the same body
     (one whose nearest distance is not finite gives no echo).
     """
+    ranges = np.asarray(distances, dtype=np.float64).tolist()
+    return np.array(_surfaces(ranges, np.asarray(bodies).tolist()))
+
+
+def merge_echoes(echoes: ArrayLike, merge_m: float) -> FloatArray:
+    """Sorted echoes (K,): each chain of echoes spaced less than ``merge_m`` becomes its nearest
+    (NaN, no echo, is dropped)."""
+    return np.array(_merged(np.asarray(echoes, dtype=np.float64).ravel().tolist(), merge_m))
+
+
+def _surfaces(distances: list[float], bodies: list[int]) -> list[float]:
+    """:func:`surface_echoes` of a fan's ``distances`` and ``bodies`` as lists."""
     nearest: list[float] = []
     surface = -1  # the body of the run the last ray belongs to (-1: no surface)
-    for distance, body in zip(
-        np.asarray(distances, dtype=np.float64).tolist(), np.asarray(bodies).tolist(), strict=True
-    ):
+    for distance, body in zip(distances, bodies, strict=True):
         if body < 0 or math.isnan(distance):
             surface = -1
         elif body != surface:
@@ -139,15 +153,10 @@ def surface_echoes(distances: ArrayLike, bodies: ArrayLike) -> FloatArray:
             surface = body
         elif distance < nearest[-1]:
             nearest[-1] = distance
-    return np.array([d for d in nearest if math.isfinite(d)])
+    return [d for d in nearest if math.isfinite(d)]
 
 
-def merge_echoes(echoes: ArrayLike, merge_m: float) -> FloatArray:
-    """Sorted echoes (K,): each chain of echoes spaced less than ``merge_m`` becomes its nearest
-    (NaN, no echo, is dropped)."""
-    e = sorted(
-        x for x in np.asarray(echoes, dtype=np.float64).ravel().tolist() if not math.isnan(x)
-    )
-    return np.array(
-        [x for before, x in itertools.pairwise([-math.inf, *e]) if x - before >= merge_m]
-    )
+def _merged(echoes: list[float], merge_m: float) -> list[float]:
+    """:func:`merge_echoes` of ``echoes`` as a list."""
+    e = sorted(x for x in echoes if not math.isnan(x))
+    return [x for before, x in itertools.pairwise([-math.inf, *e]) if x - before >= merge_m]

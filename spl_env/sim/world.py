@@ -140,6 +140,9 @@ class BulletWorld:
         self._dynamic: list[int] = []  # bodies with mass, which the physics moves
         self._moved: set[int] = set()  # bodies moved by hand (set_pose, set_joints) ever
         self._disturbed = False  # a dynamic body was set by hand since the last physics step
+        # body id -> the joint angles set_joints last gave it, while nothing else can have
+        # moved its joints since (a physics step or a restored snapshot forgets them all)
+        self._joints_set: dict[int, list[list[float]]] = {}
         self._filter_bits: dict[int, int] = {}  # body id -> its private collision filter group
         self.time_step_s = time_step_s
         p.setGravity(0.0, 0.0, -gravity_mps2, physicsClientId=self.client)
@@ -476,14 +479,15 @@ class BulletWorld:
 
     def set_joints(self, name: str, angles: Sequence[float]) -> None:
         """Set the revolute joints ``0 .. len(angles) - 1`` of body ``name`` to ``angles``
-        (rad), at rest."""
+        (rad), at rest. Joints that already hold these angles, set here with nothing able to
+        move them since, are left as they are (a scripted robot's head that does not turn)."""
         body_id = self.body(name)
-        p.resetJointStatesMultiDof(
-            body_id,
-            list(range(len(angles))),
-            [[float(angle)] for angle in angles],
-            physicsClientId=self.client,
-        )
+        targets = [[float(angle)] for angle in angles]
+        if self._joints_set.get(body_id) != targets:
+            p.resetJointStatesMultiDof(
+                body_id, list(range(len(angles))), targets, physicsClientId=self.client
+            )
+            self._joints_set[body_id] = targets
         self._touched(body_id)
 
     def _touched(self, body_id: int) -> None:
@@ -503,6 +507,7 @@ class BulletWorld:
         for _ in range(n_substeps):
             p.stepSimulation(physicsClientId=self.client)
         self._disturbed = False
+        self._joints_set.clear()  # the step may have moved joints
 
     def at_rest(self) -> bool:
         """True when a physics step would leave the world as it is: no dynamic body was set by
@@ -538,6 +543,7 @@ class BulletWorld:
         since (:meth:`_forget_contacts`; a dynamic body's orientation comes back within a
         rounding, the same one every time)."""
         p.restoreState(stateId=state_id, physicsClientId=self.client)
+        self._joints_set.clear()
         self._forget_contacts()
         self._disturbed = True
 
@@ -576,20 +582,18 @@ class BulletWorld:
         limbs, swaying about the sensor, must not stop them.
         """
         mask = -1 if transparent_body < 0 else ~self._filter_bit(transparent_body)
-        n = len(starts)
-        fractions = np.ones(n)
-        ids = np.full(n, -1, dtype=np.int64)
         batch = p.MAX_RAY_INTERSECTION_BATCH_SIZE
-        for lo in range(0, n, batch):
-            hits = p.rayTestBatch(
+        hits = []
+        for lo in range(0, len(starts), batch):
+            hits += p.rayTestBatch(
                 starts[lo : lo + batch].tolist(),
                 ends[lo : lo + batch].tolist(),
                 collisionFilterMask=mask,
                 physicsClientId=self.client,
             )
-            body = np.array([hit[0] for hit in hits], dtype=np.int64)
-            ids[lo : lo + batch] = body
-            fractions[lo : lo + batch] = np.where(body >= 0, [hit[2] for hit in hits], 1.0)
+        ids = np.array([hit[0] for hit in hits], dtype=np.int64).reshape(-1)
+        fractions = np.array([hit[2] for hit in hits], dtype=np.float64).reshape(-1)
+        fractions[ids < 0] = 1.0
         return fractions, ids
 
     def _filter_bit(self, body_id: int) -> int:

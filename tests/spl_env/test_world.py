@@ -371,3 +371,43 @@ def test_at_most_the_private_filter_bits_worth_of_bodies_become_transparent() ->
     with pytest.raises(RuntimeError, match="at most 29 bodies"):
         world.ray_test(start, end, transparent_body=body)
     world.close()
+
+
+def test_set_joints_holds_after_a_restored_snapshot_and_a_physics_step() -> None:
+    """set_joints leaves joints alone that it set to the same angles before, unless a snapshot
+    or a physics step may have moved them since: after either, the angles asked for hold."""
+    import pybullet as p
+
+    world = BulletWorld(time_step_s=0.01)
+    NaoRobot(world, "self", team=0, config=RobotConfig())
+    world.add_sphere(
+        "ball",
+        radius_m=0.05,
+        mass_kg=0.05,
+        position=(2.0, 0.0, 1.0),
+        rgba=(1, 1, 1, 1),
+        rolling_friction=0.0,
+        restitution=0.0,
+    )
+    body = world.body("self")
+
+    def head() -> list[float]:
+        return [s[0] for s in p.getJointStates(body, [0, 1], physicsClientId=world.client)]
+
+    try:
+        world.set_joints("self", [0.0, 0.0])
+        snapshot = world.save_state()
+        world.set_joints("self", [0.5, -0.2])
+        world.restore_state(snapshot)  # the joints are back at 0, 0
+        assert head() == [0.0, 0.0]
+        world.set_joints("self", [0.5, -0.2])
+        assert head() == pytest.approx([0.5, -0.2], abs=1e-12)
+        # a physics step may move joints (here done by hand, as a step could)
+        p.resetJointStatesMultiDof(body, [0, 1], [[0.0], [0.0]], physicsClientId=world.client)
+        world.set_pose("ball", (0.0, 0.0, 1.0), 0.0)  # a dropped ball: the world steps
+        assert not world.at_rest()
+        world.step(1)
+        world.set_joints("self", [0.5, -0.2])
+        assert head() == pytest.approx([0.5, -0.2], abs=1e-12)
+    finally:
+        world.close()
