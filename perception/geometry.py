@@ -127,9 +127,10 @@ def project_points(
     """
     p = np.atleast_2d(np.asarray(points_cam, dtype=np.float64))
     front = p[:, 0] > 1e-9
-    uv = np.full((len(p), 2), np.nan)
-    uv[front, 0] = cx - fx * p[front, 1] / p[front, 0]
-    uv[front, 1] = cy - fy * p[front, 2] / p[front, 0]
+    depth = np.where(front, p[:, 0], np.nan)  # NaN behind: each of its pixels comes out NaN
+    uv = np.empty((len(p), 2))
+    uv[:, 0] = cx - fx * p[:, 1] / depth
+    uv[:, 1] = cy - fy * p[:, 2] / depth
     return uv, front
 
 

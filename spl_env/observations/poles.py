@@ -54,9 +54,10 @@ class PoleMapEncoder:
                 np.sqrt(np.trace(slam.landmark_covs, axis1=1, axis2=2)), STD_SCALE_M
             )
         since = np.ones(n)
-        time_s = data.output.time_s
+        time_s = float(data.output.time_s)
         for landmark_id, seen_s in data.output[POLE_LAST_SEEN].items():
-            since[landmark_id] = squash(time_s - seen_s, SINCE_SEEN_SCALE_S)
+            ago = time_s - float(seen_s)  # squash's arithmetic, in floats
+            since[landmark_id] = ago / (ago + SINCE_SEEN_SCALE_S)
         return {
             "landmarks_cos_bearing": cos_b,
             "landmarks_sin_bearing": sin_b,
