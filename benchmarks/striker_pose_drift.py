@@ -10,7 +10,10 @@ and so the odometry, stepped), the heading's NEES (squared error over the believ
 1 for a consistent filter) and the position's (2 for a consistent one), and the ball's error on
 the field while it lies within ``NEAR_M`` of our robot and is believed. Reported over all steps
 and by band of the time since the last pole sighting; ``blocked_share_of_heading_change`` is the
-share of the summed step-to-step change of the heading error that falls in blocked steps.
+share of the summed step-to-step change of the heading error that falls in blocked steps;
+``blind_at_the_feet`` the steps whose frame showed neither a pole nor a field feature while the
+head was pitched down to its stop (the ball at our feet), with the errors there and the longest
+such run (a striker stuck at a ball pinned against the goalie looks down for many seconds).
 
     python benchmarks/striker_pose_drift.py --set camera_mode=geometric --set frontend=colour \\
         --episodes 100                                      # tuning seeds 0-99, ~1 min
@@ -39,6 +42,7 @@ from agents.evaluate import load_policy, played_steps
 NEAR_M = 3.0  # the ball's error counts while it lies this near our robot (m), as the issue's
 AGENT = 0  # our robot's row in the world state
 GAP_BANDS_S = (0.0, 0.1, 1.0, 3.0, 6.0, math.inf)  # time since the last pole sighting (s)
+PITCH_STOP_TOL_RAD = 0.02  # a head pitched this near its stop looks down at the feet
 
 
 def main() -> None:
@@ -47,6 +51,7 @@ def main() -> None:
     start = time.perf_counter()
     env, core = made_env(args)
     dt = core.config.control_dt_s
+    pitch_stop = core.config.robot.head_pitch_max_rad
     policy = load_policy(args.player, env.get_wrapper_attr("config"))
     rows: list[tuple[float, ...]] = []  # per step: the columns summary() unpacks
     for seed in range(args.seed, args.seed + args.episodes):
@@ -59,6 +64,11 @@ def main() -> None:
             since = 0.0 if np.any(belief["sighted"]) else since + dt
             near = np.hypot(*(truth["ball"] - truth["robot_pose"][:2])) < NEAR_M
             ball = np.hypot(*(truth["ball"] - belief["ball"])) if belief["ball_known"] else None
+            blind = (
+                truth["head"][1] >= pitch_stop - PITCH_STOP_TOL_RAD
+                and not np.any(belief["sighted"])
+                and not belief.get("field_features_count", 0)
+            )
             rows.append(
                 (
                     seed,
@@ -69,16 +79,18 @@ def main() -> None:
                     since,
                     float(core.world_state.blocked[AGENT]),
                     float(ball) if near and ball is not None else math.nan,
+                    float(blind),
                 )
             )
     env.close()
-    result = written_result(args, args.player, summary(np.array(rows)), start)
+    result = written_result(args, args.player, summary(np.array(rows), dt), start)
     print(json.dumps(result, indent=1))
 
 
-def summary(rows: np.ndarray) -> dict[str, Any]:
-    """Means over the steps ``rows`` (N, 8) and by band of the time since a pole sighting."""
-    seed, position, heading, heading_nees, position_nees, since, blocked, ball = rows.T
+def summary(rows: np.ndarray, dt: float) -> dict[str, Any]:
+    """Means over the steps ``rows`` (N, 9) and by band of the time since a pole sighting;
+    ``dt`` the control step (s)."""
+    seed, position, heading, heading_nees, position_nees, since, blocked, ball, blind = rows.T
     change = np.abs(np.diff(heading))[np.diff(seed) == 0]  # within episodes
     in_blocked = blocked[1:][np.diff(seed) == 0] > 0
     bands = {}
@@ -105,7 +117,42 @@ def summary(rows: np.ndarray) -> dict[str, Any]:
         "blocked_steps": float(blocked.mean()),
         "blocked_share_of_heading_change": float(change[in_blocked].sum() / change.sum()),
         "by_time_since_a_pole_sighting": bands,
+        "blind_at_the_feet": blind_summary(seed, blind > 0, position, heading, ball, dt),
     }
+
+
+def blind_summary(
+    seed: np.ndarray,
+    blind: np.ndarray,
+    position: np.ndarray,
+    heading: np.ndarray,
+    ball: np.ndarray,
+    dt: float,
+) -> dict[str, Any]:
+    """The share of the steps ``blind`` (N,) bool (module doc), the mean errors there, the
+    longest run of them within an episode (s) and how many episodes hold a run of 5 s."""
+    runs = _run_seeds(seed, blind)
+    long_runs = {s for s, length in runs if length * dt >= 5.0}
+    return {
+        "share_of_steps": float(blind.mean()),
+        "position_error_m": float(position[blind].mean()) if blind.any() else None,
+        "heading_error_deg": float(np.degrees(np.abs(heading[blind])).mean())
+        if blind.any()
+        else None,
+        "ball_error_m": float(np.nanmean(ball[blind])) if np.isfinite(ball[blind]).any() else None,
+        "position_error_elsewhere_m": float(position[~blind].mean()) if (~blind).any() else None,
+        "longest_run_s": max((length for _, length in runs), default=0) * dt,
+        "episodes_with_a_5_s_run": len(long_runs),
+    }
+
+
+def _run_seeds(seed: np.ndarray, blind: np.ndarray) -> list[tuple[int, int]]:
+    """(seed, length in steps) of each run of ``blind`` steps within an episode."""
+    out = []
+    for (s, is_blind), steps in itertools.groupby(zip(seed.tolist(), blind.tolist(), strict=True)):
+        if is_blind:
+            out.append((int(s), len(list(steps))))
+    return out
 
 
 if __name__ == "__main__":
