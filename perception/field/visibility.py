@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
 
@@ -58,6 +58,7 @@ DIRECTION_KINDS: tuple[str, ...] = tuple(
 )
 
 _EYE2 = np.eye(2)  # isotropic covariances: each point's variance times this (read-only)
+OCCLUSION_EVERY = 5  # visible_features asks its ``occluded`` about every this many samples
 _EYE2.flags.writeable = False
 
 # DetectorModel's defaults: fitted by benchmarks/fit_geometric_field_features.py on 3000
@@ -244,6 +245,9 @@ class FeatureViewConfig:
     sample_m: float = 0.02
     margin_px: float = 2.0
     min_circle_fraction: float = 0.25
+    # a goal post counts as in view when its foot is; with this set (m), only when the post
+    # at this height above its foot shows in the image too (the detector needs that much of it)
+    post_seen_height_m: float | None = None
     point_std_m: float = 0.02
     point_std_per_m: float = 0.02
     direction_std_rad: float = 0.03
@@ -265,6 +269,8 @@ class FeatureViewConfig:
         check_positive(
             owner, "min_circle_fraction", self.min_circle_fraction, upper=1.0, upper_inclusive=True
         )
+        if self.post_seen_height_m is not None:
+            check_positive(owner, "post_seen_height_m", self.post_seen_height_m)
 
 
 def visible_features(
@@ -274,15 +280,20 @@ def visible_features(
     state: CameraState,
     config: FeatureViewConfig,
     rng: np.random.Generator | None = None,
+    occluded: Callable[[FloatArray], NDArray[np.bool_]] | None = None,
 ) -> tuple[FieldFeature, ...]:
     """The features of ``field_map`` in view of ``camera`` at ``state`` on a robot at ``pose``
     (3,) (m, m, rad, field frame), in map order; noisy when ``rng`` is given (module
     docstring), else exact with the same covariances. Every tested ground point of the map is
-    projected at once (:func:`_samples`)."""
+    projected at once (:func:`_samples`). ``occluded``, when given, says which field-frame
+    ground points (N, 2) something stands in front of (N,) bool: those are not seen (a robot,
+    the ball); a goal post is then judged by its foot."""
     robot = finite_vector(pose, "pose", 3)
     view = _View(robot, camera, state, config)
     samples = _samples(field_map, config.sample_m)
     seen = view.sees(samples.points)
+    if occluded is not None and seen.any():
+        seen &= ~_occluded_samples(samples, seen, occluded)
     any_seen = np.logical_or.reduceat(seen, samples.starts)  # per map feature
     found = []
     for feature, part, in_view in zip(field_map.features, samples.parts, any_seen, strict=True):
@@ -300,9 +311,27 @@ def visible_features(
             if not directed:
                 feature = MapFeature("centre_circle", feature.points, feature.name)
             found.append(view.feature(feature, feature.points, rng))
-        elif seen[part.start]:
+        elif seen[part.start] and (feature.kind != "goal_post" or view.shows_post(feature)):
             found.append(view.feature(feature, feature.points, rng))
     return tuple(found)
+
+
+def _occluded_samples(
+    samples: _Samples, seen: NDArray[np.bool_], occluded: Callable[[FloatArray], NDArray[np.bool_]]
+) -> NDArray[np.bool_]:
+    """(N,) which of the ``seen`` samples ``occluded`` hides, asking it about every
+    ``OCCLUSION_EVERY``-th sample and the first of each map feature and of each run of seen
+    samples; the others take the answer of the nearest asked sample before them (in their own
+    feature and run: 10 cm at most apart)."""
+    index = np.arange(len(seen))
+    first = np.zeros(len(seen), dtype=bool)
+    first[samples.starts] = True
+    first[1:] |= ~seen[:-1]
+    asked = seen & (first | (index % OCCLUSION_EVERY == 0))
+    answer = np.zeros(len(seen), dtype=bool)
+    answer[asked] = np.asarray(occluded(samples.points[asked]), dtype=bool)
+    nearest = np.maximum.accumulate(np.where(asked, index, 0))
+    return seen & answer[nearest]
 
 
 @dataclass(frozen=True, eq=False)
@@ -402,6 +431,22 @@ class _View:
                 & (uv[:, 1] <= cam.height - 1 - m)
             )
         return seen
+
+    def shows_post(self, post: MapFeature) -> bool:
+        """Whether the goal ``post`` at ``post_seen_height_m`` above its foot (when set) lies
+        in the image, as its foot does (the caller has checked that)."""
+        height = self.config.post_seen_height_m
+        if height is None:
+            return True
+        foot = self.robot_points(post.points[:1])
+        point = np.array([[foot[0, 0], foot[0, 1], height]])
+        cam = self.camera
+        uv, front = project_points(
+            (point - self.state.position) @ self.rotation, cam.fx, cam.fy, cam.cx, cam.cy
+        )
+        m = self.config.margin_px
+        u, v = uv[0]
+        return bool(front[0]) and m <= u <= cam.width - 1 - m and m <= v <= cam.height - 1 - m
 
     def feature(
         self, feature: MapFeature, points: FloatArray, rng: np.random.Generator | None

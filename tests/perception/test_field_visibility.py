@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from perception.field.field_map import FieldMap
-from perception.field.visibility import FeatureViewConfig, visible_features
+from perception.field.visibility import OCCLUSION_EVERY, FeatureViewConfig, visible_features
 from perception.geometry import project_points
 from perception.types import CameraModel, CameraState
 
@@ -84,3 +84,52 @@ def test_bad_settings_are_refused() -> None:
         FeatureViewConfig(min_circle_fraction=1.5)
     with pytest.raises(ValueError, match="pose"):
         visible_features(FIELD, np.array([0.0, np.inf, 0.0]), CAMERA, STATE, CONFIG)
+
+
+def test_hidden_ground_is_not_seen_and_a_line_keeps_its_longest_clear_stretch() -> None:
+    """A stand-in occluder hides the halfway line's ground points with y in [-0.5, 0.3]: the
+    line is seen from the hidden stretch's edge to the image border on its longer side, to
+    within the OCCLUSION_EVERY samples the verdict is asked at."""
+    asked: list[np.ndarray] = []
+
+    def occluded(points: np.ndarray) -> np.ndarray:
+        asked.append(points.copy())
+        return (points[:, 1] >= -0.5) & (points[:, 1] <= 0.3) & (np.abs(points[:, 0]) < 0.01)
+
+    clear = visible_features(FIELD, BEFORE_CENTRE, CAMERA, STATE, CONFIG)
+    features = visible_features(FIELD, BEFORE_CENTRE, CAMERA, STATE, CONFIG, occluded=occluded)
+    (whole,) = [f for f in clear if f.kind == "line"]
+    (line,) = [f for f in features if f.kind == "line"]
+    lo, hi = sorted(whole.points[:, 1])  # robot frame y = field y: the robot faces +x at y = 0
+    kept = sorted(line.points[:, 1])
+    slack = OCCLUSION_EVERY * CONFIG.sample_m + 1e-9
+    if hi - 0.3 >= -0.5 - lo:  # the clear stretch on the left is the longer
+        assert kept == [pytest.approx(0.3, abs=slack), pytest.approx(hi)]
+    else:
+        assert kept == [pytest.approx(lo), pytest.approx(-0.5, abs=slack)]
+    assert sorted(f.kind for f in features) == sorted(f.kind for f in clear)
+    # along the line it was asked every OCCLUSION_EVERY samples, not at each
+    (points,) = asked
+    on_line = np.sort(points[np.abs(points[:, 0]) < 1e-9, 1])
+    assert np.median(np.diff(on_line)) == pytest.approx(slack, rel=0.01)
+
+
+def test_a_goal_post_is_seen_only_with_enough_of_it_in_the_image() -> None:
+    """With ``post_seen_height_m``, a post whose point that high above its foot falls outside
+    the image (looking down) is not seen, though its foot is."""
+    facing_goal = np.array([2.5, 0.0, 0.0])  # 2.1 m before the +x goal line, facing it
+    posts = FeatureViewConfig(post_seen_height_m=0.45)
+    level = CameraState(position=STATE.position, head_yaw=0.0, head_pitch=0.0, tilt=0.1)
+    down = CameraState(position=STATE.position, head_yaw=0.0, head_pitch=0.5, tilt=0.02)
+    for state, seen in ((level, True), (down, False)):
+        feet = visible_features(FIELD, facing_goal, CAMERA, state, CONFIG)
+        with_height = visible_features(FIELD, facing_goal, CAMERA, state, posts)
+        foot_posts = [f for f in feet if f.kind == "goal_post"]
+        assert len(foot_posts) == 2  # both feet in view either way
+        high = np.array([[p.points[0, 0], p.points[0, 1], 0.45] for p in foot_posts])
+        uv, _ = project_points(
+            (high - state.position) @ state.rotation(), CAMERA.fx, CAMERA.fy, CAMERA.cx, CAMERA.cy
+        )
+        inside = bool(np.all((uv[:, 1] >= CONFIG.margin_px) & (uv[:, 1] <= CAMERA.height - 3)))
+        assert inside == seen
+        assert sum(f.kind == "goal_post" for f in with_height) == (2 if seen else 0)

@@ -6,7 +6,10 @@ Per camera and frame:
 1. **In view**: the map's features in view of the camera the joints report, at the robot's
    true pose (:func:`perception.field.visibility.visible_features`, exact), out to the
    detector model's range (``FeatureViewConfig.detector.max_range_m``; the other view settings
-   are the pipeline's ``feature_view``).
+   are the pipeline's ``feature_view``), where nothing stands between the true camera and the
+   ground (:func:`occlusion`: a ray to each ground point must meet no body: a robot, the ball,
+   a goal), and a goal post only where the detector's ``min_cut_post_height_m`` of it shows
+   in the image (it needs that much of a post; looking down at the ball, the image cuts it).
 2. **Sway**: the rendered image comes from the true camera, which sways with the gait in a way
    the joints do not sense, while the detector places what it sees on the ground with the
    joints' camera. Each point is moved to where the joints' camera puts the pixel at which
@@ -32,8 +35,10 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 
 import numpy as np
+from numpy.typing import NDArray
 
 from perception.field.features import FeatureKind, FieldFeature
 from perception.field.field_map import FieldMap
@@ -47,6 +52,8 @@ from spl_env.sim.world import BulletWorld
 
 CameraPose = tuple[FloatArray, FloatArray]  # position (3,) and rotation (3, 3), robot frame
 DIRECTION_ARM_M = 0.1  # a direction is moved as the point this far along it is
+OCCLUSION_CLEARANCE_M = 0.01  # occlusion rays end this high above a ground point (m)
+OCCLUSION_SLACK_M = 0.1  # ... and count a body they meet this near the point as its own (m)
 
 
 def true_camera(robot: NaoRobot, which: str = "top") -> CameraPose:
@@ -123,7 +130,11 @@ class GeometricFieldFeatures:
         self.config = config
         self.bottom = bottom
         self.detector = FieldFeatureConfig() if detector is None else detector
-        self._view = dataclasses.replace(config, max_range_m=config.detector.max_range_m)
+        self._view = dataclasses.replace(
+            config,
+            max_range_m=config.detector.max_range_m,
+            post_seen_height_m=self.detector.min_cut_post_height_m,
+        )
 
     def observe(
         self,
@@ -134,11 +145,17 @@ class GeometricFieldFeatures:
         blur_px: float,
     ) -> tuple[FieldFeature, ...]:
         """This frame's field features (robot frame) from ``robot``'s true pose and camera."""
-        features = self.emulate(robot.pose, camera_state, true_camera(robot, "top"), rng)
+        top = robot.camera_pose_world("top")[0]
+        features = self.emulate(
+            robot.pose, camera_state, true_camera(robot, "top"), rng, occlusion(world, top)
+        )
         if not self.bottom:
             return features
         bottom = camera_state_for(robot.config, robot.head, "bottom")
-        return features + self.emulate(robot.pose, bottom, true_camera(robot, "bottom"), rng)
+        seen_from = robot.camera_pose_world("bottom")[0]
+        return features + self.emulate(
+            robot.pose, bottom, true_camera(robot, "bottom"), rng, occlusion(world, seen_from)
+        )
 
     def emulate(
         self,
@@ -146,13 +163,17 @@ class GeometricFieldFeatures:
         state: CameraState,
         seen_by: CameraPose,
         rng: np.random.Generator,
+        occluded: Callable[[FloatArray], NDArray[np.bool_]] | None = None,
     ) -> tuple[FieldFeature, ...]:
-        """One camera's features: in view of ``state`` at the true ``pose``, seen by the true
-        camera ``seen_by`` (robot frame) and placed by ``state``, missed, noisy and reported
-        as the detector would (module docstring); the same as :func:`reprojected`, then
-        :func:`~perception.field.visibility.detect`, each feature in turn, but with the
+        """One camera's features: in view of ``state`` at the true ``pose`` (and not
+        ``occluded``, field-frame ground points (N, 2) -> (N,) bool, when given), seen by the
+        true camera ``seen_by`` (robot frame) and placed by ``state``, missed, noisy and
+        reported as the detector would (module docstring); the same as :func:`reprojected`,
+        then :func:`~perception.field.visibility.detect`, each feature in turn, but with the
         projections of all of them at once."""
-        exact = visible_features(self.field_map, pose, self.camera, state, self._view)
+        exact = visible_features(
+            self.field_map, pose, self.camera, state, self._view, occluded=occluded
+        )
         if not exact:
             return ()
         moved = reproject(
@@ -192,6 +213,25 @@ class GeometricFieldFeatures:
                 std = model.reported_direction_std_rad[kind]
                 out.append(FieldFeature.trusted(kind, points, cov, direction, std))
         return tuple(out)
+
+
+def occlusion(
+    world: BulletWorld, camera_position: FloatArray
+) -> Callable[[FloatArray], NDArray[np.bool_]]:
+    """Which field-frame ground points (N, 2) a body hides from a camera at
+    ``camera_position`` (3,) (field frame): a ray from it towards each point, stopped
+    ``OCCLUSION_CLEARANCE_M`` above the carpet (so the carpet itself never stops it), meets a
+    body more than ``OCCLUSION_SLACK_M`` short of it (a goal post's own point lies at its
+    centre, inside it)."""
+
+    def occluded(points: FloatArray) -> NDArray[np.bool_]:
+        ground = np.column_stack([points, np.full(len(points), OCCLUSION_CLEARANCE_M)])
+        starts = np.ascontiguousarray(np.broadcast_to(camera_position, ground.shape))
+        fractions, bodies = world.ray_test(starts, ground)
+        length = np.linalg.norm(ground - starts, axis=1)
+        return np.asarray((bodies >= 0) & (fractions * length < length - OCCLUSION_SLACK_M))
+
+    return occluded
 
 
 def _with_arm(feature: FieldFeature) -> FloatArray:
