@@ -427,6 +427,10 @@ class SplFieldScene:
         """The field's dimensions."""
         return self.config.dimensions
 
+    def goal_post_body_ids(self) -> tuple[int, ...]:
+        """The PyBullet bodies of the four goal posts."""
+        return tuple(self.world.body(name) for name in self.bodies.goal_posts)
+
     def pole_body_ids(self) -> tuple[int, ...]:
         """PyBullet body ids (L,) of the poles, in the order of ``landmark_ids``."""
         return tuple(self.world.body(self.bodies.poles[int(i)]) for i in self.landmark_ids)

@@ -67,3 +67,24 @@ def test_the_carpet_and_our_own_robot_hide_nothing(scene) -> None:
     camera = ours.camera_pose_world()[0]
     ground = np.array([[-1.3, 0.0], [-1.0, 0.2], [0.0, -0.4], [1.0, 0.5]])
     assert not occlusion(world, camera)(ground).any()
+
+
+def test_the_ball_on_the_penalty_mark_hides_it_and_a_post_does_not_hide_itself(scene) -> None:
+    world, ours, other = scene
+    posts = tuple(world.body(f"goal_post_{i}") for i in range(4))
+    other.place(np.array([-5.0, 3.6, 0.0]))
+    (mark,) = [f.points[0] for f in FIELD.of_kind("penalty_mark") if f.points[0, 0] > 0]
+    ours.place(np.array([mark[0] - 1.2, 0.0, 0.0]), head=np.array([0.0, 0.35]))
+    camera = ours.camera_pose_world()[0]
+    occluded = occlusion(world, camera, posts)
+    try:
+        assert not occluded(mark[None])[0]
+        world.set_pose("ball", (mark[0], mark[1], 0.05), 0.0)  # the ball on the mark
+        assert occluded(mark[None])[0]
+        # facing the goal, the posts' own points (inside them) are not hidden by the posts
+        ours.place(np.array([mark[0] - 0.5, 0.0, 0.0]), head=np.array([0.0, 0.0]))
+        feet = np.array([f.points[0] for f in FIELD.of_kind("goal_post") if f.points[0, 0] > 0])
+        assert not occlusion(world, ours.camera_pose_world()[0], posts)(feet).any()
+    finally:
+        world.set_pose("ball", (-4.6, 3.6, 0.05), 0.0)
+        ours.place(POSE, head=np.array([0.0, 0.35]))

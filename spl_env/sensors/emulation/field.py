@@ -8,8 +8,9 @@ Per camera and frame:
    detector model's range (``FeatureViewConfig.detector.max_range_m``; the other view settings
    are the pipeline's ``feature_view``), where nothing stands between the true camera and the
    ground (:func:`occlusion`: a ray to each ground point must meet no body: a robot, the ball,
-   a goal), and a goal post only where the detector's ``min_cut_post_height_m`` of it shows
-   in the image (it needs that much of a post; looking down at the ball, the image cuts it).
+   a goal; a goal post only well short of its own point, which lies inside it), and a goal
+   post only where the detector's ``min_cut_post_height_m`` of it shows in the image (it needs
+   that much of a post; looking down at the ball, the image cuts it).
 2. **Sway**: the rendered image comes from the true camera, which sways with the gait in a way
    the joints do not sense, while the detector places what it sees on the ground with the
    joints' camera. Each point is moved to where the joints' camera puts the pixel at which
@@ -53,7 +54,7 @@ from spl_env.sim.world import BulletWorld
 CameraPose = tuple[FloatArray, FloatArray]  # position (3,) and rotation (3, 3), robot frame
 DIRECTION_ARM_M = 0.1  # a direction is moved as the point this far along it is
 OCCLUSION_CLEARANCE_M = 0.01  # occlusion rays end this high above a ground point (m)
-OCCLUSION_SLACK_M = 0.1  # ... and count a body they meet this near the point as its own (m)
+POST_SLACK_M = 0.1  # ... and count a goal post they meet this near the point as its own (m)
 
 
 def true_camera(robot: NaoRobot, which: str = "top") -> CameraPose:
@@ -115,7 +116,8 @@ class GeometricFieldFeatures:
     with ``bottom``, the ``vision_both_cameras`` one: the bottom camera's features after the
     top one's). ``config`` is the pipeline's ``feature_view`` (its ``detector`` model and view
     settings); ``detector`` the detector's configuration, for its covariance model (default:
-    :class:`~perception.vision.field_features.FieldFeatureConfig`'s, as the pipeline's)."""
+    :class:`~perception.vision.field_features.FieldFeatureConfig`'s, as the pipeline's);
+    ``post_bodies`` the goal posts' PyBullet bodies (:func:`occlusion`)."""
 
     def __init__(
         self,
@@ -124,8 +126,10 @@ class GeometricFieldFeatures:
         config: FeatureViewConfig,
         bottom: bool = False,
         detector: FieldFeatureConfig | None = None,
+        post_bodies: tuple[int, ...] = (),
     ) -> None:
         self.field_map = field_map
+        self.post_bodies = post_bodies
         self.camera = camera
         self.config = config
         self.bottom = bottom
@@ -147,14 +151,22 @@ class GeometricFieldFeatures:
         """This frame's field features (robot frame) from ``robot``'s true pose and camera."""
         top = robot.camera_pose_world("top")[0]
         features = self.emulate(
-            robot.pose, camera_state, true_camera(robot, "top"), rng, occlusion(world, top)
+            robot.pose,
+            camera_state,
+            true_camera(robot, "top"),
+            rng,
+            occlusion(world, top, self.post_bodies),
         )
         if not self.bottom:
             return features
         bottom = camera_state_for(robot.config, robot.head, "bottom")
         seen_from = robot.camera_pose_world("bottom")[0]
         return features + self.emulate(
-            robot.pose, bottom, true_camera(robot, "bottom"), rng, occlusion(world, seen_from)
+            robot.pose,
+            bottom,
+            true_camera(robot, "bottom"),
+            rng,
+            occlusion(world, seen_from, self.post_bodies),
         )
 
     def emulate(
@@ -216,20 +228,22 @@ class GeometricFieldFeatures:
 
 
 def occlusion(
-    world: BulletWorld, camera_position: FloatArray
+    world: BulletWorld, camera_position: FloatArray, post_bodies: tuple[int, ...] = ()
 ) -> Callable[[FloatArray], NDArray[np.bool_]]:
     """Which field-frame ground points (N, 2) a body hides from a camera at
     ``camera_position`` (3,) (field frame): a ray from it towards each point, stopped
     ``OCCLUSION_CLEARANCE_M`` above the carpet (so the carpet itself never stops it), meets a
-    body more than ``OCCLUSION_SLACK_M`` short of it (a goal post's own point lies at its
-    centre, inside it)."""
+    body first; one of ``post_bodies`` (the goal posts, whose own map point lies at their
+    centre, inside them) only when more than ``POST_SLACK_M`` short of the point."""
+    posts = np.asarray(post_bodies, dtype=np.int64)
 
     def occluded(points: FloatArray) -> NDArray[np.bool_]:
         ground = np.column_stack([points, np.full(len(points), OCCLUSION_CLEARANCE_M)])
         starts = np.ascontiguousarray(np.broadcast_to(camera_position, ground.shape))
         fractions, bodies = world.ray_test(starts, ground)
         length = np.linalg.norm(ground - starts, axis=1)
-        return np.asarray((bodies >= 0) & (fractions * length < length - OCCLUSION_SLACK_M))
+        own_post = np.isin(bodies, posts) & (fractions * length >= length - POST_SLACK_M)
+        return np.asarray((bodies >= 0) & ~own_post)
 
     return occluded
 

@@ -83,7 +83,12 @@ def _field_features(bottom: bool) -> EmulatorFactory:
         field_map = shared_field_map(scene.dimensions)
         model, view = sensors.camera.model, perception.feature_view
         return GeometricFieldFeatures(
-            field_map, model, view, bottom=bottom, detector=perception.field_detector
+            field_map,
+            model,
+            view,
+            bottom=bottom,
+            detector=perception.field_detector,
+            post_bodies=scene.goal_post_body_ids(),
         )
 
     return build
