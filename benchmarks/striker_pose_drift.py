@@ -13,7 +13,8 @@ and by band of the time since the last pole sighting; ``blocked_share_of_heading
 share of the summed step-to-step change of the heading error that falls in blocked steps;
 ``blind_at_the_feet`` the steps whose frame showed neither a pole nor a field feature while the
 head was pitched down to its stop (the ball at our feet), with the errors there and the longest
-such run (a striker stuck at a ball pinned against the goalie looks down for many seconds).
+such run (a striker stuck at a ball pinned against the goalie looks down for many seconds); in
+an env whose perception holds no field features, the steps with no pole and the head there.
 
     python benchmarks/striker_pose_drift.py --set camera_mode=geometric --set frontend=colour \\
         --episodes 100                                      # tuning seeds 0-99, ~1 min

@@ -322,7 +322,7 @@ def _occluded_samples(
     """(N,) which of the ``seen`` samples ``occluded`` hides, asking it about every
     ``OCCLUSION_EVERY``-th sample and the first of each map feature and of each run of seen
     samples; the others take the answer of the nearest asked sample before them (in their own
-    feature and run: 10 cm at most apart)."""
+    feature and run: about 10 cm apart at most)."""
     index = np.arange(len(seen))
     first = np.zeros(len(seen), dtype=bool)
     first[samples.starts] = True
