@@ -63,6 +63,7 @@ import json
 import math
 import time
 from collections import defaultdict
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -76,6 +77,7 @@ from field_feature_detection import (
     match_segment,
     segment_distance,
 )
+from numpy.typing import NDArray
 from scipy.optimize import minimize
 
 import spl_env  # noqa: F401  (registers the env ids)
@@ -100,6 +102,7 @@ from spl_env.sensors.emulation.field import (
     CameraPose,
     GeometricFieldFeatures,
     joints_camera,
+    occlusion,
     reprojected,
     true_camera,
 )
@@ -112,6 +115,12 @@ HOLD_S = 1.0  # a random head target is held this long (s)
 PITCH_MIN_RAD = -0.1  # random pitch from a little up to the joint's lowest (looking higher,
 # the camera sees little but the far field's edge)
 POLICIES = ("scan", "random")
+# the features in view, as the emulator judges them: to the last band's edge, hidden where a
+# body stands in front, a post only with the detector's cut-post height of it in the image
+IN_VIEW = FeatureViewConfig(
+    max_range_m=BANDS_M[-1],
+    post_seen_height_m=PipelineConfig().field_detector.min_cut_post_height_m,
+)
 
 
 class RandomTargets:
@@ -171,7 +180,9 @@ def direction_error(kind: str, detected: float, truth: float) -> float:
 @dataclass(frozen=True)
 class Frame:
     """One rendered frame: the robot's true pose, the joints' camera state, the true camera
-    (robot frame), what the detector found, the head policy and the frame's motion blur."""
+    (robot frame), what the detector found, the head policy, the frame's motion blur, and the
+    occlusion verdicts of the map's ground points asked about in it (field-frame point ->
+    hidden), recorded while its world was live."""
 
     pose: FloatArray
     state: CameraState
@@ -179,6 +190,11 @@ class Frame:
     detected: tuple[FieldFeature, ...]
     policy: str
     blur_px: float
+    hidden: dict[tuple[float, float], bool]
+
+    def occluded(self, points: FloatArray) -> NDArray[np.bool_]:
+        """The recorded verdicts of ``points`` (N, 2) (KeyError for one never asked)."""
+        return np.array([self.hidden[(float(x), float(y))] for x, y in points], dtype=bool)
 
 
 def compare(
@@ -192,8 +208,9 @@ def compare(
     ``rows``. Detections are matched to the map as the true camera saw them (the sway taken
     out); errors are measured against the features in view as the joints' camera places them
     (the sway left in: the emulator adds it), and in all against the exact ones."""
-    view = FeatureViewConfig(max_range_m=BANDS_M[-1])
-    exact = visible_features(field_map, frame.pose, camera, frame.state, view)
+    exact = visible_features(
+        field_map, frame.pose, camera, frame.state, IN_VIEW, occluded=frame.occluded
+    )
     placed_by = joints_camera(frame.state)
     targets = {kind: field_map.of_kind(kind) for kind in FEATURE_KINDS}
     truth = {}
@@ -286,6 +303,8 @@ def collect(episodes: int, seconds: float, seed: int) -> tuple[list[Frame], Fiel
         raise TypeError(f"the fit needs the top camera's detector, got {type(provider).__name__}")
     camera = core.config.sensors.camera
     ours = core.robots[0]
+    field_map = FieldMap(core.scene.dimensions)
+    posts = core.scene.goal_post_body_ids()
     frames = []
     policies: dict[str, Any] = {
         "scan": HeadScan.from_config(core.config),
@@ -305,6 +324,12 @@ def collect(episodes: int, seconds: float, seed: int) -> tuple[list[Frame], Fiel
                 blur = blur_length_px(
                     core.camera_yaw_rate_rps, camera.exposure_time_s, camera.model.fx
                 )
+                hidden = RecordedOcclusion(
+                    occlusion(core.world, ours.camera_pose_world()[0], posts)
+                )
+                visible_features(
+                    field_map, ours.pose, camera.model, state, IN_VIEW, occluded=hidden
+                )  # asks about every ground point the comparison and the emulator will
                 frames.append(
                     Frame(
                         pose=ours.pose.copy(),
@@ -313,11 +338,25 @@ def collect(episodes: int, seconds: float, seed: int) -> tuple[list[Frame], Fiel
                         detected=core.perception_output[FIELD_FEATURES],
                         policy=name,
                         blur_px=blur,
+                        hidden=hidden.verdicts,
                     )
                 )
-    field_map = FieldMap(core.scene.dimensions)
     env.close()
     return frames, field_map, camera.model
+
+
+class RecordedOcclusion:
+    """``occluded`` that keeps each verdict it gives (``verdicts``: point -> hidden)."""
+
+    def __init__(self, occluded: Callable[[FloatArray], NDArray[np.bool_]]) -> None:
+        self._occluded = occluded
+        self.verdicts: dict[tuple[float, float], bool] = {}
+
+    def __call__(self, points: FloatArray) -> NDArray[np.bool_]:
+        hidden = np.asarray(self._occluded(points), dtype=bool)
+        for (x, y), h in zip(points.tolist(), hidden.tolist(), strict=True):
+            self.verdicts[(x, y)] = h
+        return hidden
 
 
 def rows_of(
@@ -335,7 +374,7 @@ def rows_of(
         detected = (
             frame.detected
             if emulator is None
-            else emulator.emulate(frame.pose, frame.state, frame.seen_by, rng)
+            else emulator.emulate(frame.pose, frame.state, frame.seen_by, rng, frame.occluded)
         )
         compare(frame, detected, field_map, camera, rows)
     rows["frames"] = len(frames)
