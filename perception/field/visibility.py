@@ -58,8 +58,8 @@ DIRECTION_KINDS: tuple[str, ...] = tuple(
 )
 
 _EYE2 = np.eye(2)  # isotropic covariances: each point's variance times this (read-only)
-OCCLUSION_EVERY = 5  # visible_features asks its ``occluded`` about every this many samples
 _EYE2.flags.writeable = False
+OCCLUSION_EVERY = 5  # visible_features asks its ``occluded`` about every this many samples
 
 # DetectorModel's defaults: fitted by benchmarks/fit_geometric_field_features.py on 3000
 # rendered frames of NoPoles patrols (tuning seeds 0-4, 30 s each under the head scan and under

@@ -713,9 +713,10 @@ class RobotDetector:
 
         if depth <= 0:
             return verdict("above_horizon")
-        too = self._width_rejection(width_px, depth, u0, u1, pixel is not base or not cut)
-        if too is not None:
-            return verdict(too)
+        if cut:  # (a box not cut off passed these tests before its colour was searched)
+            too = self._width_rejection(width_px, depth, u0, u1, wide_test=pixel is not base)
+            if too is not None:
+                return verdict(too)
         # line 12: too narrow in metres (rows' widths: a leaning edge widens the box, not a row)
         width_m = row_width_px * depth / cam.fx
         if width_m < cfg.min_width_m:

@@ -149,25 +149,25 @@ class GeometricFieldFeatures:
         blur_px: float,
     ) -> tuple[FieldFeature, ...]:
         """This frame's field features (robot frame) from ``robot``'s true pose and camera."""
-        top = robot.camera_pose_world("top")[0]
-        features = self.emulate(
-            robot.pose,
-            camera_state,
-            true_camera(robot, "top"),
-            rng,
-            occlusion(world, top, self.post_bodies),
-        )
+        features = self._camera(world, robot, camera_state, "top", rng)
         if not self.bottom:
             return features
         bottom = camera_state_for(robot.config, robot.head, "bottom")
-        seen_from = robot.camera_pose_world("bottom")[0]
-        return features + self.emulate(
-            robot.pose,
-            bottom,
-            true_camera(robot, "bottom"),
-            rng,
-            occlusion(world, seen_from, self.post_bodies),
-        )
+        return features + self._camera(world, robot, bottom, "bottom", rng)
+
+    def _camera(
+        self,
+        world: BulletWorld,
+        robot: NaoRobot,
+        state: CameraState,
+        which: str,
+        rng: np.random.Generator,
+    ) -> tuple[FieldFeature, ...]:
+        """:meth:`emulate` for ``robot``'s ``which`` camera ("top" or "bottom") at the joints'
+        ``state``, hidden where bodies of ``world`` stand in front of the true camera."""
+        position = robot.camera_pose_world("bottom" if which == "bottom" else "top")[0]
+        hidden = occlusion(world, position, self.post_bodies)
+        return self.emulate(robot.pose, state, true_camera(robot, which), rng, hidden)
 
     def emulate(
         self,
