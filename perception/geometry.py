@@ -29,13 +29,16 @@ FloatArray = NDArray[np.float64]
 def wrap_angle(angle: ArrayLike) -> FloatArray:
     """Wrap angles (rad, any shape) into [-pi, pi)."""
     a = np.asarray(angle, dtype=np.float64)
-    return (a + np.pi) % (2.0 * np.pi) - np.pi
+    wrapped = (a + np.pi) % (2.0 * np.pi) - np.pi
+    # an angle a hair below -pi: the remainder rounds up to 2 pi, which would give +pi
+    return wrapped - 2.0 * np.pi * (wrapped >= np.pi)  # (NaN stays NaN)
 
 
 def wrap_scalar(angle: float) -> float:
     """:func:`wrap_angle` of one angle (rad) as a Python float, into [-pi, pi): the same
     arithmetic (Python's float remainder is NumPy's), without the array's overhead."""
-    return (float(angle) + math.pi) % (2.0 * math.pi) - math.pi
+    wrapped = (float(angle) + math.pi) % (2.0 * math.pi) - math.pi
+    return wrapped - 2.0 * math.pi if wrapped >= math.pi else wrapped
 
 
 def compose(a: ArrayLike, b: ArrayLike) -> FloatArray:

@@ -89,6 +89,8 @@ def mahalanobis_cost_matrix(
     if Z.ndim != 2:
         raise ValueError(f"z must have shape (M, m), got shape {Z.shape}")
     n_tracks, m = len(Z_hat), Z.shape[1]
+    if n_tracks == 0 and Z_hat.size == 0 and S_all.size == 0:  # no tracks, given as [] too
+        Z_hat, S_all = Z_hat.reshape(0, m), S_all.reshape(0, m, m)
     if Z_hat.shape != (n_tracks, m) or S_all.shape != (n_tracks, m, m):
         raise ValueError(
             f"z_hat must have shape (T, {m}) and S (T, {m}, {m}) (m from z), "

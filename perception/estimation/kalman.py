@@ -112,9 +112,12 @@ def wrapped_residual(z: ArrayLike, z_hat: ArrayLike, angles: Sequence[int]) -> F
 
     ``z`` and ``z_hat`` broadcast over leading axes; ``angles`` are indices into the last
     axis of the entries that are angles (rad), such as a bearing, whose plain difference can
-    be off by 2 pi across ±pi.
+    be off by 2 pi across ±pi. Raises ValueError naming ``z`` or ``z_hat`` if it holds a NaN
+    or an infinity.
     """
     y = np.subtract(z, z_hat, dtype=np.float64)
+    if not np.isfinite(y).all():
+        _require_finite(z=np.asarray(z, dtype=np.float64), z_hat=np.asarray(z_hat, np.float64))
     for i in angles:
         y[..., i] = wrap_angle(y[..., i])
     return y

@@ -30,10 +30,15 @@ nothing changes.
 subspace ``L`` informs (``e^T (P + L^-1)^-1 e`` when ``L`` is invertible); for a correct
 observation it is chi-square distributed with ``rank(L)`` degrees of freedom, so an
 observation is refused when ``d²`` exceeds that chi-square quantile at
-``PoseFilterConfig.gate_probability``. A residual along an uninformed direction (the position
-along a seen line) neither moves the estimate nor counts against the gate. A gate refuses
-most often when the estimate is far off, so it leaves the filter slightly overconfident: at
-p = 0.99 the mean NEES of the tests' simulation is about 3 % above its 3 dof.
+``PoseFilterConfig.gate_probability``. ``L`` here is the information fused, the observation's
+own scaled by ``observation_weight`` (``w``): the distance is against ``P + (w L)^-1``, so the
+gate is as much looser than one on the observation's own covariance as ``1 / w`` in variance
+(10x at the pipeline's 0.1: it refuses a correct observation less often than
+``1 - gate_probability``, and an inconsistent one only when it lies far off). A residual
+along an uninformed direction (the position along a seen line) neither moves the estimate nor
+counts against the gate. A gate refuses most often when the estimate is far off, so it leaves
+the filter slightly overconfident: at p = 0.99 the mean NEES of the tests' simulation is about
+3 % above its 3 dof.
 
 **The field's half-turn symmetry** (seed 004 §2.3-2.4: field features cannot tell one end of
 the field from the other) is not modelled here. The sensor model converges to the pose, or to
@@ -94,6 +99,7 @@ class PoseFilterConfig:
     - ``gate_probability``: a pose observation is refused when its squared Mahalanobis
       distance in the subspace it informs exceeds the chi-square quantile at this probability,
       in (0, 1), with ``rank(information)`` degrees of freedom; None fuses every observation.
+      The distance is against ``P + (observation_weight L)^-1`` (module docstring, "Gate").
     - ``observation_weight`` in (0, 1]: the share of an observation's information fused. The
       sensor model's information takes one frame's feature errors as independent, and this
       filter takes successive frames' as independent; a walking robot sees the same lines

@@ -88,7 +88,11 @@ from numpy.typing import ArrayLike
 from perception.estimation.gating import chi2_threshold, mahalanobis_squared
 from perception.estimation.kalman import joseph_update
 from perception.geometry import FloatArray, rot_z
-from perception.tracking.checked_inputs import checked_self_pose, checked_sightings
+from perception.tracking.checked_inputs import (
+    TIME_ROUNDING_S,
+    checked_self_pose,
+    checked_sightings,
+)
 from perception.tracking.robot_tracker import constant_velocity_model, sighting_in_field
 from perception.types import BallEstimate, BallSighting, SlamEstimate
 from perception.validation import (
@@ -104,7 +108,6 @@ from perception.validation import (
 _OWNER = "BallFilterConfig"
 _H = np.hstack([np.eye(2), np.zeros((2, 2))])  # the sightings measure the position
 _ORIGIN, _NO_POSE_COV = np.zeros(3), np.zeros((3, 3))  # a sighting in the robot's own frame
-_TIME_ROUNDING_S = 1e-9  # frame times summed step by step: 3 x 0.1 s may come out over 0.3 s
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -236,9 +239,10 @@ class BallFilterConfig:
                 f"{_OWNER}.detection_chance must be a tuple of (upper bound, chance) tuples, "
                 f"got {pairs!r}"
             )
+        for k, (bound, _) in enumerate(pairs):
+            check_finite(_OWNER, f"detection_chance[{k}][0]", bound)
         bounds = [float(bound) for bound, _ in pairs]
-        finite = all(math.isfinite(bound) for bound in bounds)
-        if not bounds or not finite or bounds != sorted(set(bounds)) or bounds[0] <= 0:
+        if not bounds or bounds != sorted(set(bounds)) or bounds[0] <= 0:
             raise ValueError(
                 f"{_OWNER}.detection_chance must be (upper bound, chance) pairs with positive "
                 f"ascending bounds, got {self.detection_chance}"
@@ -402,10 +406,11 @@ class BallFilter:
         """Roll on to ``time_s`` (s, not before the last update) and move with the robot's
         ``odometry`` (3,) since the last frame; take our own kick since then (``kick_velocity``
         (2,) m/s, robot frame, zero or None for none); fuse this frame's ``sightings`` (robot
-        frame); lose a ball whose belief grew too uncertain, or lay ``in_view`` (whether a
-        robot-frame point (2,) shows in this frame's image; None: not known) unseen too often,
-        counting no misses beside ``robots`` (N, 2) (m, robot frame: the robots believed
-        around; None: none known) at the default ``near_robot_detection_chance`` (module doc).
+        frame; taken best-scored first, in whatever order given); lose a ball whose belief
+        grew too uncertain, or lay ``in_view`` (whether a robot-frame point (2,) shows in this
+        frame's image; None: not known) unseen too often, counting no misses beside ``robots``
+        (N, 2) (m, robot frame: the robots believed around; None or empty: none known) at the
+        default ``near_robot_detection_chance`` (module doc).
         Returns the estimate placed on the field from ``self_pose``.
 
         Every argument is checked before the filter changes; bad ones raise ValueError or
@@ -415,12 +420,15 @@ class BallFilter:
             raise ValueError(f"time_s must not go back: {time_s} after {self._time_s}")
         odometry = finite_vector(odometry, "odometry", 3)
         checked = checked_sightings(sightings, BallSighting)
-        best_score = max((float(sighting.score) for sighting in sightings), default=0.0)
+        best_first = sorted(range(len(checked)), key=lambda k: -float(sightings[k].score))
+        checked = [checked[k] for k in best_first]  # a stable sort: equals keep their order
+        best_score = float(sightings[best_first[0]].score) if best_first else 0.0
         pose, pose_cov = checked_self_pose(self_pose)
         if in_view is not None and not callable(in_view):
             raise TypeError(f"in_view must be a function of a point (2,) or None, got {in_view!r}")
         robot_points = np.zeros((0, 2))
-        empty = isinstance(robots, list | tuple) and len(robots) == 0  # no robot either
+        empty = np.size(robots) == 0 if isinstance(robots, np.ndarray) else robots in ([], ())
+        # ([], (), an empty array: no robot)
         if robots is not None and not empty:
             robot_points = finite_points(robots, "robots")
         kick = (
@@ -441,7 +449,7 @@ class BallFilter:
                 self._outlier = self._moved_point(self._outlier, odometry)
         elif self._waiting:
             limit = self.config.start_confirm_s
-            if limit is not None and time_s - self._waiting_s > limit + _TIME_ROUNDING_S:
+            if limit is not None and time_s - self._waiting_s > limit + TIME_ROUNDING_S:
                 self._waiting = []
             self._waiting = [self._predicted(x, P, dt, odometry) for x, P in self._waiting]
         self._time_s = time_s

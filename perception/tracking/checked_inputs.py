@@ -1,6 +1,6 @@
 """The checks the trackers make of their inputs before they change: range-and-bearing
 sightings and the sensing robot's pose. Errors name the argument, what was expected and what
-came."""
+came. Also the slack of their time comparisons, :data:`TIME_ROUNDING_S`."""
 
 from __future__ import annotations
 
@@ -8,7 +8,17 @@ from collections.abc import Sequence
 
 from perception.geometry import FloatArray
 from perception.types import BallSighting, RobotSighting, SlamEstimate
-from perception.validation import check_covariance, check_finite, check_positive, finite_vector
+from perception.validation import (
+    InvalidTypeError,
+    check_covariance,
+    check_finite,
+    check_positive,
+    finite_vector,
+)
+
+# frame times summed step by step come out a little off: 0.1 s added 20 times is not 2.0 s, so
+# spans of frames are compared with this slack (s)
+TIME_ROUNDING_S = 1e-9
 
 
 def checked_sightings(
@@ -17,14 +27,16 @@ def checked_sightings(
     """Check ``sightings``, a sequence of ``kind`` (each with a finite ``score``); return each
     one's ``(range_m > 0, bearing_rad, cov (2, 2) positive definite)``."""
     if isinstance(sightings, (kind, str, bytes)) or not isinstance(sightings, Sequence):
-        raise TypeError(
+        raise InvalidTypeError(
             f"sightings must be a sequence of {kind.__name__}, got {type(sightings).__name__}"
         )
     checked = []
     for i, sighting in enumerate(sightings):
         name = f"sightings[{i}]"
         if not isinstance(sighting, kind):
-            raise TypeError(f"{name} must be a {kind.__name__}, got {type(sighting).__name__}")
+            raise InvalidTypeError(
+                f"{name} must be a {kind.__name__}, got {type(sighting).__name__}"
+            )
         check_positive(name, "range_m", sighting.range_m)
         check_finite(name, "bearing_rad", sighting.bearing_rad)
         check_finite(name, "score", sighting.score)

@@ -50,7 +50,11 @@ from perception.estimation.association import (
 from perception.estimation.gating import chi2_threshold
 from perception.estimation.kalman import joseph_update, predict
 from perception.geometry import FloatArray
-from perception.tracking.checked_inputs import checked_self_pose, checked_sightings
+from perception.tracking.checked_inputs import (
+    TIME_ROUNDING_S,
+    checked_self_pose,
+    checked_sightings,
+)
 from perception.types import RobotSighting, RobotTrack, SlamEstimate
 from perception.validation import (
     check_finite,
@@ -266,7 +270,9 @@ class RobotTracker:
                 track.x, track.P = predict(track.x, track.P, F, Q)
         self._time_s = t
         self._tracks = [
-            track for track in self._tracks if t - track.last_seen_s <= config.drop_after_s
+            track
+            for track in self._tracks
+            if t - track.last_seen_s <= config.drop_after_s + TIME_ROUNDING_S
         ]
 
         measurements = [

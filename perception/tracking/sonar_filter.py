@@ -43,11 +43,11 @@ from scipy.cluster.hierarchy import fcluster, linkage
 
 from perception.geometry import FloatArray, wrap_angle
 from perception.sensor_models import N_SONAR_SECTORS, SonarModel
+from perception.tracking.checked_inputs import TIME_ROUNDING_S, checked_sightings
 from perception.types import RobotSighting
 from perception.validation import (
     InvalidTypeError,
     check_choice,
-    check_covariance,
     check_finite,
     check_instance,
     check_int,
@@ -265,7 +265,7 @@ class SonarFilter:
         self._window.append((t, tuple(row[~np.isnan(row)] for row in readings)))
         window_s = self.config.window_s
         if window_s is not None:
-            while t - self._window[0][0] >= window_s:
+            while t - self._window[0][0] >= window_s - TIME_ROUNDING_S:
                 self._window.popleft()
         self._observations = self._cluster()
         return self._observations
@@ -393,22 +393,16 @@ def confirm_with_sonar(
     check_instance("config", config, SonarFilterConfig)
     if not isinstance(model, SonarModel):
         raise InvalidTypeError(f"model must be a SonarModel, got {type(model).__name__}")
-    for name, items in (("sightings", sightings), ("observations", observations)):
-        if not isinstance(items, Sequence):
-            raise InvalidTypeError(f"{name} must be a sequence, got {type(items).__name__}")
+    checked_sightings(sightings, RobotSighting)  # what the tracker it feeds would refuse
+    if not isinstance(observations, Sequence):
+        raise InvalidTypeError(
+            f"observations must be a sequence, got {type(observations).__name__}"
+        )
     for k, obs in enumerate(observations):
         if not isinstance(obs, SonarObservation):
             raise InvalidTypeError(
                 f"observations[{k}] must be a SonarObservation, got {type(obs).__name__}"
             )
-    for k, sighting in enumerate(sightings):
-        if not isinstance(sighting, RobotSighting):
-            raise InvalidTypeError(
-                f"sightings[{k}] must be a RobotSighting, got {type(sighting).__name__}"
-            )
-        check_positive(f"sightings[{k}]", "range_m", sighting.range_m)
-        check_finite(f"sightings[{k}]", "bearing_rad", sighting.bearing_rad)
-        check_covariance(sighting.cov, f"sightings[{k}].cov", 2, singular_ok=True)
     pairs = sorted(
         (abs(observations[j].range_m - predicted), k, j)
         for k, sighting in enumerate(sightings)

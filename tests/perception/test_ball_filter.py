@@ -551,6 +551,36 @@ def test_a_sighting_scored_start_at_once_score_or_more_starts_a_belief_at_once(
         np.testing.assert_array_equal(estimate.relative_cov, first.relative_cov)
 
 
+def test_sightings_are_taken_best_scored_first_in_whatever_order_given() -> None:
+    """A frame's sightings of a true ball at (1, 0) scored 0.95 and a false one scored 0.5: the
+    confident one starts the belief at once (and a waiting candidate is the better of two
+    low-scored ones), listed first or last."""
+    pose = [0.0, 0.0, 0.0]
+    config = dataclasses.replace(CONFIRMED, start_at_once_score=0.7)
+    true = dataclasses.replace(observe(pose, [1.0, 0.0]), score=0.95)
+    false = dataclasses.replace(observe(pose, [2.0, 2.0]), score=0.5)
+    for frame in ([true, false], [false, true]):
+        estimate = BallFilter(config).update(0.0, frame, STILL, self_pose(pose))
+        assert estimate.known
+        np.testing.assert_allclose(estimate.relative[:2], [1.0, 0.0], atol=1e-12)
+    low_true, low_false = (dataclasses.replace(s, score=v) for s, v in ((true, 0.6), (false, 0.4)))
+    for frame in ([low_true, low_false], [low_false, low_true]):
+        estimate = BallFilter(config).update(0.0, frame, STILL, self_pose(pose))
+        assert not estimate.known and estimate.candidate is not None
+        np.testing.assert_allclose(estimate.candidate, [1.0, 0.0], atol=1e-12)
+
+
+def test_no_robots_may_come_as_an_empty_list_or_array() -> None:
+    pose = [0.0, 0.0, 0.0]
+    seen = [observe(pose, [1.0, 0.0])]
+    estimates = [
+        BallFilter().update(0.0, seen, STILL, self_pose(pose), robots=robots)
+        for robots in (None, [], (), np.zeros(0), np.zeros((0, 2)))
+    ]
+    for estimate in estimates[1:]:
+        np.testing.assert_array_equal(estimate.relative, estimates[0].relative)
+
+
 def test_reset_forgets_the_waiting_sighting() -> None:
     pose = [0.0, 0.0, 0.0]
     ball_filter = BallFilter(CONFIRMED)
@@ -1217,6 +1247,9 @@ def test_config_wants_detection_chance_as_a_tuple_of_pairs() -> None:
     for bad in ([(1.0, 0.5)], ((1.0, 0.5, 0.1),), ([1.0, 0.5],)):
         with pytest.raises(TypeError, match=r"BallFilterConfig\.detection_chance"):
             BallFilterConfig(detection_chance=bad)  # type: ignore[arg-type]
+    for bound in ("1.0", None, True):
+        with pytest.raises(TypeError, match=r"BallFilterConfig\.detection_chance\[0\]\[0\]"):
+            BallFilterConfig(detection_chance=((bound, 0.5),))  # type: ignore[arg-type]
 
 
 def test_config_gate_is_the_chi_square_quantile() -> None:

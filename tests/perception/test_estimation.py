@@ -158,6 +158,10 @@ def test_wrapped_residual_wraps_only_the_angles() -> None:
     y = wrapped_residual(Z, [0.0, 3.1], (1,))
     np.testing.assert_allclose(y[:, 0], Z[:, 0])
     np.testing.assert_allclose(y[:, 1], [-0.1, 2 * math.pi - 6.1, -3.1], atol=1e-12)
+    with pytest.raises(ValueError, match=r"^z must be finite"):
+        wrapped_residual([math.nan, 1.0], [0.0, 0.0], (1,))
+    with pytest.raises(ValueError, match=r"^z_hat must be finite"):
+        wrapped_residual([0.0, 1.0], [0.0, math.inf], (1,))
 
 
 @pytest.mark.parametrize(
@@ -425,6 +429,8 @@ def test_cost_matrix_of_empty_inputs(n_tracks: int, n_meas: int) -> None:
     )
     assert cost.shape == (n_tracks, n_meas)
     assert global_nearest_neighbour(cost, 1.0).matches.shape == (0, 2)
+    if n_tracks == 0:  # no tracks may come as plain empty lists too
+        assert mahalanobis_cost_matrix([], [], np.zeros((n_meas, 2))).shape == (0, n_meas)
 
 
 @pytest.mark.parametrize(

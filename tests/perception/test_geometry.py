@@ -36,6 +36,10 @@ def test_wrap_angle_range_and_values() -> None:
     assert wrap_angle(math.pi) == pytest.approx(-math.pi)
     many = wrap_angle(np.linspace(-50, 50, 1001))
     assert np.all(many >= -math.pi) and np.all(many < math.pi)
+    # a hair below -pi: the float remainder rounds up to 2 pi, yet the result stays below pi
+    below = np.nextafter(-math.pi, -4.0)
+    assert wrap_angle(below) == -math.pi and wrap_scalar(below) == -math.pi
+    assert np.isnan(wrap_angle(math.nan)) and math.isnan(wrap_scalar(math.nan))
 
 
 def test_wrap_scalar_is_wrap_angle_to_the_last_bit() -> None:
@@ -46,6 +50,7 @@ def test_wrap_scalar_is_wrap_angle_to_the_last_bit() -> None:
             rng.uniform(-1e3, 1e3, 2000),
             np.arange(-20, 21) * math.pi / 2,
             [0.0, -0.0, np.nextafter(math.pi, 0.0), np.nextafter(-math.pi, 0.0), 1e-300],
+            [np.nextafter(-math.pi, -4.0), np.nextafter(-3 * math.pi, -10.0)],
         ]
     )
     scalar = np.array([wrap_scalar(a) for a in angles])  # numpy scalars ...

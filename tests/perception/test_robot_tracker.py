@@ -374,6 +374,22 @@ def test_birth_confirmation_and_death() -> None:
     assert track.track_id == 0
 
 
+def test_a_track_lives_drop_after_s_whatever_the_rounding_of_summed_frame_times() -> None:
+    """Frame times summed 0.1 s at a time (as an env keeps its clock) come out a hair over or
+    under k * 0.1; a track last seen at any frame survives exactly 20 unseen frames of 0.1 s
+    with ``drop_after_s`` 2 and goes on the 21st."""
+    config = RobotTrackerConfig(drop_after_s=2.0)
+    for last_seen in range(12):
+        tracker, t = RobotTracker(config), 0.0
+        for _ in range(last_seen + 1):
+            tracker.update(t, [observe(POSE0, (2.0, 0.5))], (POSE0, EXACT))
+            t += 0.1
+        survived = 0
+        while tracker.update(t, [], (POSE0, EXACT)):
+            survived, t = survived + 1, t + 0.1
+        assert survived == 20, last_seen
+
+
 def test_one_hit_confirms_when_confirm_hits_is_1_and_max_tracks_limits_births() -> None:
     tracker = RobotTracker(RobotTrackerConfig(confirm_hits=1, max_tracks=2))
     points = [(2.0, 0.0), (0.0, 2.0), (-2.0, 0.0)]
@@ -613,7 +629,7 @@ def test_covariances_stay_symmetric_psd_and_ids_increase(
         for track in tracks:
             assert track.state.shape == (4,) and np.isfinite(track.state).all()
             assert_psd(track.cov)
-            assert t - track.last_seen_s <= config.drop_after_s
+            assert t - track.last_seen_s <= config.drop_after_s + 1e-9
             if track.track_id > last_id:  # born in this frame
                 assert track.last_seen_s == t
         last_id = max([last_id, *ids])

@@ -238,6 +238,17 @@ def test_the_window_in_seconds_forgets_old_frames():
     assert f.observations == ()
 
 
+def test_the_window_in_seconds_holds_as_many_frames_whatever_the_rounding_of_summed_times():
+    """Frame times summed 0.1 s at a time come out a hair off k * 0.1: a 0.5 s window holds
+    the newest five frames every time (the same echo each frame: one cluster of five)."""
+    f = SonarFilter(SonarFilterConfig(window_frames=10, window_s=0.5, min_cluster_size=1))
+    t, sizes = 0.0, []
+    for _ in range(20):
+        sizes.append(_summary(f.update(t, _reading(middle=(1.0,))))[0][2])
+        t += 0.1
+    assert sizes[4:] == [5] * 16
+
+
 def test_nan_padding_and_empty_readings_are_ignored():
     f = SonarFilter(SonarFilterConfig(window_frames=3, min_cluster_size=2))
     f.update(0.0, np.full((3, 10), NAN))
@@ -582,14 +593,23 @@ def test_confirm_rejects_bad_inputs():
         confirm_with_sonar([_sighting(NAN, 0.0)], [observation], MODEL)
     with pytest.raises(ValueError, match=r"sightings\[0\].bearing_rad"):
         confirm_with_sonar([_sighting(1.0, math.inf)], [observation], MODEL)
+    singular = RobotSighting(range_m=1.0, bearing_rad=0.0, cov=np.diag([0.01, 0.0]))
+    with pytest.raises(ValueError, match=r"sightings\[0\].cov"):  # the tracker refuses it
+        confirm_with_sonar([singular], [observation], MODEL)
+    with pytest.raises(ValueError, match=r"sightings\[0\].team"):
+        confirm_with_sonar([_sighting(1.0, 0.0, team="red")], [observation], MODEL)
 
 
 def test_confirm_with_sonar_names_arguments_of_the_wrong_kind() -> None:
     sighting = RobotSighting(range_m=1.0, bearing_rad=0.1, cov=np.eye(2) * 1e-3)
     model = SonarModel()
-    with pytest.raises(InvalidTypeError, match=r"^sightings must be a sequence, got NoneType"):
+    with pytest.raises(
+        InvalidTypeError, match=r"^sightings must be a sequence of RobotSighting, got NoneType"
+    ):
         confirm_with_sonar(None, [], model)  # type: ignore[arg-type]
-    with pytest.raises(InvalidTypeError, match=r"^sightings must be a sequence, got RobotSighting"):
+    with pytest.raises(
+        InvalidTypeError, match=r"^sightings must be a sequence of RobotSighting, got RobotSighting"
+    ):
         confirm_with_sonar(sighting, [], model)  # type: ignore[arg-type]
     with pytest.raises(InvalidTypeError, match=r"^observations must be a sequence, got NoneType"):
         confirm_with_sonar([], None, model)  # type: ignore[arg-type]
