@@ -120,7 +120,9 @@ class CirclesEnv(RobotEnv[RoomState]):
     ranges, from odometry and laser alone, new circles entering the state at their first
     sighting (``admission="provisional"``, :mod:`perception.slam.circle_slam`);
     ``circle_map="laser"`` maps with :mod:`perception.circles.circle_map` on the believed pose
-    instead, ``self_pose="oracle"`` believes the true pose with configured noise.
+    instead, and with it ``self_pose="oracle"`` believes the true pose with configured noise
+    (``circle_map="slam"`` reads the circle SLAM's own map, so it needs
+    ``self_pose="circle_slam"``).
 
     **Action**: ``Box(-1, 1, (2,), float32)``: the left and right wheel speeds as fractions of
     the top speed (12.3 rad/s). NaN or out-of-range actions raise ``ValueError``. The body

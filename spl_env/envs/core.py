@@ -137,7 +137,11 @@ class RobotEnv(gym.Env[dict[str, Any], np.ndarray], Generic[StateT]):
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": round(1.0 / self.config.control_dt_s)}
         self.world = BulletWorld(time_step_s=self.config.physics_dt_s)
-        self._build()
+        try:
+            self._build()
+        except BaseException:  # refused: no env to close() comes back, so free the world here
+            self.world.close()
+            raise
         self.observation_space = compose_space(self.encoders)
         box = self.task.action_space
         self.action_space = box

@@ -132,7 +132,8 @@ class GoalieEnv(SplEnv):
     walks up to it and kicks it once, at full strength, at a random point of our goal.
 
     **Reward**: ``goal`` -10 when the ball is in our goal, ``save`` +1 when the kicked ball
-    stops or leaves the field elsewhere; terminated then. 30-second episodes.
+    stops or the ball leaves the field elsewhere (our own clearance before the shot counts: the
+    kicker then stands); terminated then. 30-second episodes.
 """
         + _PERCEPTION_DOC
     )

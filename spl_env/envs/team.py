@@ -273,7 +273,11 @@ class TeamEnv(ParallelEnv[str, dict[str, np.ndarray], np.ndarray]):
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": round(1.0 / self.config.control_dt_s)}
         self.world = BulletWorld(time_step_s=self.config.physics_dt_s)
-        self._build()
+        try:
+            self._build()
+        except BaseException:  # refused: no env to close() comes back, so free the world here
+            self.world.close()
+            raise
         self._initial_state = self.world.save_state()
         self.agents: list[str] = []
         self._rng: np.random.Generator | None = None  # seeded by reset()

@@ -11,6 +11,7 @@ cost more than all the rest of a geometric-mode env step.
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -132,6 +133,10 @@ class BulletWorld:
         if not (0.0 < time_step_s <= 0.1):
             raise ValueError(f"time_step_s must be in (0, 0.1] s, got {time_step_s}")
         self._client: int | None = p.connect(p.DIRECT)
+        # every client this world connected, disconnected by close() or, for a world dropped
+        # unclosed (or an env whose construction failed), when it is collected
+        self._connected = [self._client]
+        self._disconnect = weakref.finalize(self, _disconnect_all, self._connected)
         self._bodies: dict[str, int] = {}
         self._floor: PaintedFloor | None = None
         # the lighting the floor was last shaded under, and its RGB (3,) then
@@ -651,6 +656,7 @@ class BulletWorld:
             assert self._floor is not None  # render() asks only for a painted floor
             if self._probe is None:
                 self._probe = _floor_probe(self._floor.rgba)
+                self._connected.append(self._probe)
             _, _, rgba, _, _ = _tiny_render(
                 self._probe,
                 3,
@@ -665,12 +671,16 @@ class BulletWorld:
 
     def close(self) -> None:
         """Disconnect; safe to call more than once."""
-        if self._client is not None:
-            p.disconnect(physicsClientId=self._client)
-            self._client = None
-        if self._probe is not None:
-            p.disconnect(physicsClientId=self._probe)
-            self._probe = None
+        self._disconnect()
+        self._client = self._probe = None
+
+
+def _disconnect_all(clients: list[int]) -> None:
+    """Disconnect the PyBullet ``clients`` (ids) still connected, and forget them."""
+    for client in clients:
+        if p.isConnected(physicsClientId=client):
+            p.disconnect(physicsClientId=client)
+    clients.clear()
 
 
 def _floor_probe(rgba: Sequence[float]) -> int:

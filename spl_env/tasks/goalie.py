@@ -36,7 +36,7 @@ class GoalieTaskConfig(SoccerTaskConfig):
 
     episode_s: float = 30.0
     shot_distance_m: tuple[float, float] = (1.5, 3.5)  # the ball starts this far out (m)
-    save_reward: float = 1.0  # reward when a kicked ball stops (or leaves) without a goal
+    save_reward: float = 1.0  # reward when a kicked ball stops (or the ball leaves) not in goal
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -72,8 +72,10 @@ class GoalieTask(SoccerTask):
     (:func:`spl_env.tasks.soccer_skills.approach_and_kick`); others walk to random waypoints.
 
     Reward terms: ``goal`` -goal_reward when the ball is in our goal; ``save`` +save_reward
-    when a kicked ball stops slower than ``stopped_speed_mps`` or leaves the field other than
-    through our goal. Terminated then, or on a goal.
+    when a kicked ball stops slower than ``stopped_speed_mps`` or the ball leaves the field
+    other than through our goal. Terminated then, or on a goal. Any kick counts: a goalie that
+    clears the ball before the kicker reaches it (the kicker then stands, its shot gone) has
+    kept it out, and so has one that pushes it over a line.
     """
 
     config: GoalieTaskConfig

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import functools
+import gc
 import math
 from collections.abc import Iterator
 
+import gymnasium as gym
 import numpy as np
 import pytest
 
@@ -411,3 +413,30 @@ def test_set_joints_holds_after_a_restored_snapshot_and_a_physics_step() -> None
         assert head() == pytest.approx([0.5, -0.2], abs=1e-12)
     finally:
         world.close()
+
+
+def _next_client_id() -> int:
+    """The id PyBullet gives the next client (it reuses the lowest free one)."""
+    world = BulletWorld(time_step_s=0.01)
+    client = world.client
+    world.close()
+    return client
+
+
+def test_a_world_dropped_unclosed_or_an_env_refused_while_building_frees_its_client() -> None:
+    """A refused ``gym.make`` gives no env to close: the world it had connected is closed with
+    the refusal; a world dropped without ``close()`` disconnects when it is collected."""
+    free = _next_client_id()
+    with pytest.raises(ValueError, match="shot_distance_m"):
+        gym.make("SPL/Goalie-v0", **{"task.shot_distance_m": (30.0, 40.0)})
+    gc.collect()
+    assert _next_client_id() == free
+    world = BulletWorld(time_step_s=0.01)
+    assert world.client == free
+    del world
+    gc.collect()
+    assert _next_client_id() == free
+    world = BulletWorld(time_step_s=0.01)
+    world.close()
+    world.close()  # twice is fine
+    assert _next_client_id() == free
