@@ -153,8 +153,15 @@ def load_policy(
     (``pretrained:<name>``) or an SB3 PPO ``.zip``.
 
     ValueError for a baseline of the other kind than the env (a head policy on a soccer env,
-    a soccer player on a head env or on one whose head is in the action) and, given the env's
-    ``observation_space``, for a model trained on other observations."""
+    a soccer player on a head env or on one whose head is in the action), for an env that is
+    neither (the Circles envs: :mod:`agents.drivers` drives them, from Python) and, given the
+    env's ``observation_space``, for a model trained on other observations."""
+    if not isinstance(config.task, HeadControlTaskConfig | SoccerTaskConfig):
+        raise ValueError(
+            f"no policy here plays this env ({type(config.task).__name__}): these tools play "
+            "the SPL envs; drive a Circles env from Python with agents.drivers.WaypointDriver "
+            "(README, 'Circles/Office-v0')"
+        )
     if spec in BASELINES:
         if not isinstance(config.task, HeadControlTaskConfig):
             raise ValueError(
@@ -444,18 +451,43 @@ def prepare_run(
     try:
         saved = training_config(policy_spec) if policy_spec else {}
         env_id = env_id or saved.get("env_id", DEFAULT_ENV_ID)
-        env = gym.make(
-            env_id,
-            render_mode=render_mode,
-            **env_kwargs_for(policy_spec, parse_overrides(overrides)),
-        )
+        env = made_env(env_id, render_mode, policy_spec, parse_overrides(overrides))
         config = env.get_wrapper_attr("config")
+        if config.info_level != "full":
+            raise ValueError(
+                f"info_level must stay 'full' here (the metrics read perception and ground "
+                f"truth from info), got {config.info_level!r}"
+            )
         spec = policy_spec or default_policy(config)
         policy = load_policy(spec, config, env.observation_space)
         out.mkdir(parents=True, exist_ok=True)
     except USER_ERRORS as error:
         parser.error(str(error))
     return PreparedRun(env, policy, env_id, spec)
+
+
+def made_env(
+    env_id: str, render_mode: str | None, policy_spec: str | None, overrides: dict[str, Any]
+) -> gym.Env:
+    """``env_id`` made with :func:`env_kwargs_for` the policy and ``overrides``; ValueError
+    saying so when the settings of the model's training config are what this env refuses (a
+    model of another env: a head policy's settings on a soccer env)."""
+    try:
+        return gym.make(env_id, render_mode=render_mode, **env_kwargs_for(policy_spec, overrides))
+    except USER_ERRORS as error:
+        saved = training_config(policy_spec) if policy_spec else {}
+        trained_on = saved.get("env_id")
+        if trained_on is None or trained_on == env_id:
+            raise
+        try:  # is it the model's settings that this env refuses?
+            gym.make(env_id, **overrides).close()
+        except USER_ERRORS:
+            raise error from None
+        reason = str(error).split(" was raised from the environment creator")[0]
+        raise ValueError(
+            f"policy {policy_spec!r} was trained on {trained_on} and carries its settings, "
+            f"which {env_id} refuses ({reason}): evaluate it on {trained_on}"
+        ) from None
 
 
 def env_kwargs_for(policy: str | None, overrides: dict[str, Any]) -> dict[str, Any]:

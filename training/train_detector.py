@@ -32,7 +32,9 @@ import argparse
 import dataclasses
 import json
 import math
+import os
 import sys
+import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -575,21 +577,28 @@ def train(
 
 
 def save(path: Path, data: dict[str, Any]) -> None:
-    """Write a weights dict (see :func:`main`) to ``path``."""
+    """Write a weights dict (see :func:`main`) to ``path`` whole or not at all (a file beside
+    it, then renamed over it)."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    torch.save(data, path)
+    partial = path.with_name(path.name + ".partial")
+    try:
+        torch.save(data, partial)
+        os.replace(partial, path)
+    finally:
+        partial.unlink(missing_ok=True)
 
 
 def fit_measurement(
-    path: Path,
     net: PoleNet,
     images: NDArray[np.uint8],
     records: list[dict[str, Any]],
     meta: dict[str, Any],
 ) -> tuple[dict[str, Any], dict[str, Any]]:
-    """Fit the range laws on the labels and the noise on ``net``'s detections; save to ``path``.
+    """Fit the range laws on the labels and the noise on ``net``'s detections.
 
-    Returns the saved weights dict and the fits' sample counts.
+    Returns the weights dict to save and the fits' sample counts. Writes nothing the caller
+    keeps: the detector that the noise is fitted on reads a provisional copy in a temporary
+    folder, so a fit that fails leaves the weights file of an earlier run as it was.
     """
     camera = CameraModel(**meta["camera"])
     laws = fit_range_laws(records, camera)
@@ -608,9 +617,12 @@ def fit_measurement(
         "camera": meta["camera"],
         "range_model": dataclasses.asdict(provisional),
     }
-    save(path, data)
     codes = [PoleCode(**code) for code in meta["pole_codes"]]
-    detector = CnnPoleDetector(CnnDetectorConfig(weights=path), camera, codes, PoleGeometry())
+    with tempfile.TemporaryDirectory() as folder:
+        provisional_path = Path(folder) / "provisional.pt"
+        save(provisional_path, data)
+        weights = CnnDetectorConfig(weights=provisional_path)
+        detector = CnnPoleDetector(weights, camera, codes, PoleGeometry())
     sightings = match_sightings(detector, images, records)
     margin = fit_aspect_margin(sightings, provisional, camera)
     detector.range_model = dataclasses.replace(provisional, aspect_margin=margin)
@@ -624,7 +636,6 @@ def fit_measurement(
         detector.range_model, rel_var=noise["rel_var"], bearing_std_px=noise["bearing_std_px"]
     )
     data["range_model"] = dataclasses.asdict(model)
-    save(path, data)
     fits = {
         "fit_poles": laws["fit_poles"],
         "law_calibration": calibration,
@@ -639,7 +650,7 @@ def refit(path: Path, data_folder: Path) -> None:
     old = torch.load(path, map_location="cpu", weights_only=True)
     net = network_from_weights(old)
     images, records, meta = load_dataset(data_folder)
-    data, fits = fit_measurement(path, net, images, records, meta)
+    data, fits = fit_measurement(net, images, records, meta)
     command = " ".join(["python -m training.train_detector", *sys.argv[1:]])
     data["training"] = {**old.get("training", {}), "refit": {"command": command, **fits}}
     save(path, data)
@@ -685,7 +696,7 @@ def main() -> None:
     print(f"loaded {len(images)} images in {time.perf_counter() - start:.0f} s", flush=True)
     classes = list(meta["classes"])
     net, log = train(config, images, samples, classes, validation)
-    data, fits = fit_measurement(args.out, net, images, records, meta)
+    data, fits = fit_measurement(net, images, records, meta)
     data["training"] = {
         "command": " ".join(["python -m training.train_detector", *sys.argv[1:]]),
         "config": dataclasses.asdict(config),

@@ -94,8 +94,13 @@ class ActiveVisionEnv(SplEnv):
 
     ``info_level="light"`` keeps only ``reward_terms`` (fast training); ``info_timing=True``
     adds ``timing`` (physics, render, sensors, perception seconds; off by default, because
-    seconds measure the host, not the world). Robot tracks and the circle map of
-    ARCHITECTURE §5 are not in v0: this env's perception has no robot tracker or laser mapping.
+    seconds measure the host, not the world). Robot tracks are not in v0 (its perception has
+    no robot tracker): ``SPL/ActiveVision-v1``
+    (:class:`spl_env.envs.active_vision_robots.ActiveVisionRobotsEnv`) adds them. Other keys
+    come with settings: ``circles_*`` with the laser on (``laser=FINE_LASER``;
+    :mod:`spl_env.observations.circles`), ``field_features_since_seen`` in place of the
+    ``landmarks_*`` keys without poles (the ``-NoPoles`` ids;
+    :mod:`spl_env.observations.field_features`).
 
     **Camera modes** (``camera_mode``): ``"rendered"`` (default) renders a frame and runs the
     front end on it; ``"geometric"`` (about 10x faster) projects the poles' band centres

@@ -157,8 +157,8 @@ class CirclesEnv(RobotEnv[RoomState]):
     ``circles`` (K, 3) the objects' true circles, ``blocked``; ``reward_terms``.
     ``info_level="light"`` keeps only ``reward_terms``.
 
-    **Scripted baselines**: :class:`agents.baselines.WaypointDriver` (the layout's route,
-    seed 001 §5.2.2, with Braitenberg avoidance) and :class:`agents.baselines.BraitenbergDriver`.
+    **Scripted baselines**: :class:`agents.drivers.WaypointDriver` (the layout's route,
+    seed 001 §5.2.2, with Braitenberg avoidance) and :class:`agents.drivers.BraitenbergDriver`.
     """
 
     task_class: ClassVar[type[CircleMappingTask]] = CircleMappingTask

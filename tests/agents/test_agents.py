@@ -329,6 +329,15 @@ GEOMETRIC = ["--set", "camera_mode=geometric", "frontend=colour", "episode_s=1"]
             ["--env", "SPL/ActiveVision-v0", "--policy", "pretrained:striker", *GEOMETRIC],
             "trained on striker options; it cannot play this head env",
         ),
+        (
+            evaluate_main,
+            ["--env", "SPL/Striker-v0", "--policy", "pretrained:active_vision", *GEOMETRIC],
+            r"trained on SPL/ActiveVision-v1 and carries its settings, which SPL/Striker-v0 "
+            r"refuses \(unknown config key 'task.information_weight'",
+        ),
+        (evaluate_main, [*GEOMETRIC, "info_level=light"], "info_level must stay 'full'"),
+        (demo_main, [*GEOMETRIC, "info_level=light"], "info_level must stay 'full'"),
+        (evaluate_main, ["--env", "Circles/Office-v0"], r"WaypointDriver"),
         (train_main, ["--timesteps", "0"], "--timesteps must be >= 1, got 0"),
         (train_main, ["--env", "SPL/Nope-v0"], "no env 'SPL/Nope-v0' is registered"),
         (train_main, ["--set", "bogus=1"], "unknown config key 'bogus'"),

@@ -31,7 +31,7 @@ from perception.vision.cnn_model import (
     encode,
     fuse_batch_norms,
 )
-from training.train_detector import TrainConfig
+from training.train_detector import TrainConfig, save
 
 CAMERA = CameraModel()
 POLE = PoleGeometry()
@@ -334,3 +334,15 @@ def test_train_config_checks_the_network_shape() -> None:
         TrainConfig(head_channels=-1)
     with pytest.raises(ValueError, match="epochs"):
         TrainConfig(epochs=0)
+
+
+def test_weights_are_saved_whole_or_not_at_all(tmp_path: Path) -> None:
+    """A save that fails (here: something that does not pickle) leaves the file of an earlier
+    save as it was, and nothing beside it."""
+    path = tmp_path / "weights.pt"
+    save(path, {"format": 1})
+    before = path.read_bytes()
+    with pytest.raises(Exception, match="pickle"):
+        save(path, {"format": 2, "bad": lambda: None})
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["weights.pt"]
