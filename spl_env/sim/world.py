@@ -11,6 +11,7 @@ cost more than all the rest of a geometric-mode env step.
 
 from __future__ import annotations
 
+import hashlib
 import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -203,15 +204,11 @@ class BulletWorld:
         """A fixed body at ``base_position`` (3,) seen as one triangle ``mesh`` (body frame) of
         colour ``rgba``; it collides as the primitives ``collision`` (their colours unused), or
         not at all."""
-        textured = {} if mesh.uvs is None else {"uvs": mesh.uvs.tolist()}
         vis = p.createVisualShape(
             p.GEOM_MESH,
-            vertices=mesh.vertices.tolist(),
-            indices=mesh.triangles.ravel().tolist(),
-            normals=mesh.normals.tolist(),
             rgbaColor=list(finite_vector(rgba, "rgba", 4)),
             physicsClientId=self.client,
-            **textured,
+            **_mesh_lists(mesh),
         )
         if vis < 0:
             raise RuntimeError(f"PyBullet could not create the mesh {name!r}")
@@ -673,6 +670,31 @@ class BulletWorld:
         """Disconnect; safe to call more than once."""
         self._disconnect()
         self._client = self._probe = None
+
+
+# PyBullet's createVisualShape keeps a reference to the lists of a mesh it is given and never
+# lets go, so every env that built its scene afresh would leak its meshes' lists (about 1 MB
+# an env). An equal mesh is handed the same lists again instead, made once per process.
+_MESH_LISTS: dict[bytes, dict[str, list[Any]]] = {}
+_MESH_LISTS_KEPT = 256  # distinct meshes kept (a scene has a few dozen)
+
+
+def _mesh_lists(mesh: TriangleMesh) -> dict[str, list[Any]]:
+    """``createVisualShape``'s ``vertices``, ``indices``, ``normals`` (and ``uvs``) of ``mesh``,
+    the same list objects for every equal mesh."""
+    arrays = {"vertices": mesh.vertices, "indices": mesh.triangles.ravel(), "normals": mesh.normals}
+    if mesh.uvs is not None:
+        arrays["uvs"] = mesh.uvs
+    digest = hashlib.blake2b(digest_size=16)
+    for name, array in arrays.items():
+        digest.update(f"{name}{array.dtype}{array.shape}".encode())
+        digest.update(np.ascontiguousarray(array).tobytes())
+    key = digest.digest()
+    if key not in _MESH_LISTS:
+        if len(_MESH_LISTS) >= _MESH_LISTS_KEPT:
+            _MESH_LISTS.clear()
+        _MESH_LISTS[key] = {name: array.tolist() for name, array in arrays.items()}
+    return _MESH_LISTS[key]
 
 
 def _disconnect_all(clients: list[int]) -> None:

@@ -22,7 +22,14 @@ from spl_env.scenes.spl_field import (
 )
 from spl_env.sensors.camera import Camera, CameraConfig, EpisodeLighting
 from spl_env.sensors.sonar import Sonar, SonarConfig
-from spl_env.sim.world import MAX_PARTS_PER_BODY, PRIVATE_FILTER_BITS, BulletWorld, VisualPart
+from spl_env.sim.world import (
+    MAX_PARTS_PER_BODY,
+    PRIVATE_FILTER_BITS,
+    BulletWorld,
+    TriangleMesh,
+    VisualPart,
+    _mesh_lists,
+)
 
 SCENE = SceneConfig()
 
@@ -440,3 +447,23 @@ def test_a_world_dropped_unclosed_or_an_env_refused_while_building_frees_its_cli
     world.close()
     world.close()  # twice is fine
     assert _next_client_id() == free
+
+
+def test_equal_meshes_hand_pybullet_the_same_lists() -> None:
+    """PyBullet keeps the lists a mesh is given: an env rebuilding its scene hands over the
+    lists of an equal mesh made before (no new memory), with the mesh's values."""
+    corners = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]])
+    up = np.tile([0.0, 0.0, 1.0], (4, 1))
+
+    def quad(z: float) -> TriangleMesh:
+        return TriangleMesh(
+            vertices=corners + np.array([0.0, 0.0, z]),
+            triangles=np.array([[0, 1, 2], [0, 2, 3]]),
+            normals=up,
+        )
+
+    first, again, other = _mesh_lists(quad(0.0)), _mesh_lists(quad(0.0)), _mesh_lists(quad(0.5))
+    assert all(first[name] is again[name] for name in first)
+    assert first["vertices"] == corners.tolist() and first["indices"] == [0, 1, 2, 0, 2, 3]
+    assert first["normals"] == up.tolist() and "uvs" not in first
+    assert other["vertices"] != first["vertices"]
