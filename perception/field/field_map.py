@@ -13,8 +13,9 @@ Built from :class:`~perception.field.dimensions.FieldDimensions`; kinds and conv
 - 1 ``centre_circle`` (its direction along the halfway line), 2 ``penalty_mark`` s and 4
   ``goal_post`` s.
 
-The field is symmetric under a half turn about its centre, so every feature but the centre
-circle has a twin there: field features alone cannot tell the two halves apart.
+The field is symmetric under a half turn about its centre, so every feature has a twin there
+(the centre circle and the halfway line are their own): field features alone cannot tell the
+two halves apart.
 """
 
 from __future__ import annotations

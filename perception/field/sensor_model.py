@@ -42,8 +42,13 @@ centroid, solved from its normal equations in closed form (the minimum-norm step
 direction is not constrained, which it leaves alone); the pose is then turned by ``dtheta``
 about ``c`` exactly and moved by ``t``. The error ``e`` is the weighted mean of the squared
 residuals (eq. 1). The iterations stop once every item is matched and ``e`` falls below
-``converged_rms_m²`` or has not fallen for two iterations, or after ``max_iterations`` (the
-items matched by then make the observation); a final RMS above ``accept_rms_m`` says the
+``converged_rms_m²`` or is no lower than in one of the two iterations before, or after
+``max_iterations`` (the items matched by then make the observation). The iterations before
+matched fewer items, whose error is mostly lower, so with three or more items this usually
+stops after the first step that matches them all: noiseless features from a prior 0.2 rad off
+end about 0.1 mm from the truth rather than converging further, far inside any detector's
+noise (a review's simulation of 495 views: poses within 0.27 of their std, no acceptance
+changed). A final RMS above ``accept_rms_m`` says the
 features do not fit together (a false detection, or a prior so poor that the match is wrong)
 and the observation is refused.
 
@@ -383,7 +388,8 @@ def _line_gap(a: FloatArray, b: FloatArray) -> float:
 def _two_posts(
     posts: list[FieldFeature], tables: _MapTables, field_map: FieldMap, config: SensorModelConfig
 ) -> list[MatchItem]:
-    """The first pair of seen posts about a goal's width apart, as a two-posts item."""
+    """The first pair of seen posts about a goal's width apart that some goal's posts fit with
+    the robot on the carpet, as a two-posts item."""
     for a, b in itertools.combinations(posts, 2):
         gap = b.points[0] - a.points[0]
         if abs(float(np.linalg.norm(gap)) - tables.goal_width_m) > config.relation_tolerance_m:
@@ -395,7 +401,8 @@ def _two_posts(
             for ma, mb in tables.post_pairs
             if _on_carpet(_implied_origin(a, b, ma, mb), field_map)
         )
-        return [MatchItem("two_posts", (a, b), candidates)]
+        if candidates:  # none: every order puts the robot off the carpet (noise, or it is)
+            return [MatchItem("two_posts", (a, b), candidates)]
     return []
 
 

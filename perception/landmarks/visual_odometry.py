@@ -64,8 +64,9 @@ class VisualOdometryConfig:
 
     ``bin_rad`` is the width of a histogram bin of bearing changes (a little more than one
     horizon sample's angle); votes within ``mode_halfwidth_bins`` bins of the first mode
-    count for it and its heading is their mean; the second mode is the fullest bin outside
-    ``2 * mode_halfwidth_bins + 1`` bins of the first. ``min_confidence`` (votes) is the least
+    count for it and its heading is their mean; the second mode is the fullest window of
+    ``2 * mode_halfwidth_bins + 1`` bins (its votes counted as the first mode's are) lying
+    outside that many bins of the first. ``min_confidence`` (votes) is the least
     confidence for which the visual heading is used, ``max_disagreement_rad`` the most it may
     differ from the walk's in a frame; ``history`` previous frames are tried (the seed's 3).
     ``collision_smoothing`` is the moving average's weight of a new frame,

@@ -152,6 +152,21 @@ def test_two_posts_match_only_goal_orders_that_keep_the_robot_on_the_carpet() ->
     assert pairs == {("goal_post_+x_-y", "goal_post_+x_+y"), ("goal_post_-x_+y", "goal_post_-x_-y")}
 
 
+def test_two_posts_that_put_the_robot_off_the_carpet_in_every_order_make_no_item() -> None:
+    """Seen from just past the side edge (as noise can place a robot near it), no goal order
+    keeps the robot on the carpet: no two-posts item (each post is still an item of its own),
+    and the sensor model answers rather than crashing (it had indexed the empty candidates)."""
+    pose = np.array([4.55, 3.72, -math.pi / 2])
+    posts = [seen(pose, "goal_post_+x_+y"), seen(pose, "goal_post_+x_-y")]
+    assert [item.kind for item in match_items(posts, FIELD, CONFIG)] == ["goal_post"] * 2
+    prior = np.array([4.5, 3.6, -math.pi / 2])
+    line = seen(pose, "goal_line_+x", np.array([[4.5, 2.0], [4.5, 0.5]]))
+    for features in (posts, [*posts, line]):
+        for starts in ("prior", "hypotheses"):
+            result = observe_pose(features, prior, FIELD, SensorModelConfig(starts=starts))
+            assert result.observation is None or np.isfinite(result.observation.pose).all()
+
+
 def test_a_t_junction_beside_a_post_matches_only_junctions_with_a_post_there() -> None:
     pose = np.array([3.0, 0.3, 0.1])
     features = [seen(pose, "t_junction_goal_area_+x_+y"), seen(pose, "goal_post_+x_+y")]
