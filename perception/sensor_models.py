@@ -64,8 +64,9 @@ def _check_sectors(name: str, values: object, *, max_width_deg: float | None = N
 
 @dataclass(frozen=True, kw_only=True)
 class LaserModel:
-    """A planar laser scanner: ``n_beams`` beams evenly spaced over ``fov_deg``, centred on the
-    robot's heading, in a horizontal plane ``mount_height_m`` above the ground.
+    """A planar laser scanner: ``n_beams`` beams evenly spaced over ``fov_deg`` from the robot's
+    right, the first at ``-fov/2`` and the last a step short of ``+fov/2`` (seed 001's layout:
+    half a step left of centred), in a horizontal plane ``mount_height_m`` above the ground.
 
     A scan is (n_beams,) ranges (m) from the scanner centre, beam i along ``beam_angles()[i]``;
     each range carries Gaussian noise of ``range_noise_std_m``, and a beam with no return in
@@ -74,7 +75,7 @@ class LaserModel:
     """
 
     n_beams: int = 180  # beams, evenly spaced over the field of view
-    fov_deg: float = 180.0  # field of view (deg, in (0, 360]), centred on the robot's heading
+    fov_deg: float = 180.0  # field of view (deg, in (0, 360]) from -fov/2 (beam_angles)
     min_range_m: float = 0.1  # nearer returns are dropped (seed 001's accuracy spec: 0.1-10 m)
     max_range_m: float = 10.0  # beams reach this far
     range_noise_std_m: float = 0.02  # Gaussian range noise (seed 001)

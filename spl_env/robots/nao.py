@@ -28,7 +28,7 @@ from perception.geometry import (
     wrap_angle,
 )
 from perception.types import CameraState
-from perception.validation import check_finite, check_positive, check_reals
+from perception.validation import check_finite, check_positive, check_reals, finite_vector
 from spl_env.sim.world import BulletWorld, LinkSpec, VisualPart
 
 NAO_GREY = (0.82, 0.82, 0.84, 1.0)
@@ -157,6 +157,9 @@ class NaoCommand:
     kick_strength: float = 1.0
 
     def __post_init__(self) -> None:
+        finite_vector(self.walk, "NaoCommand.walk", 3)  # a NaN would stay in the walk for good
+        if self.head is not None:
+            finite_vector(self.head, "NaoCommand.head", 2)
         if not math.isfinite(self.kick_angle_rad):
             raise ValueError(f"NaoCommand.kick_angle_rad must be finite, got {self.kick_angle_rad}")
         if not 0.0 < self.kick_strength <= 1.0:

@@ -150,6 +150,9 @@ class Camera:
     ) -> tuple[NDArray[np.uint8], NDArray[np.int32]]:
         """Image (H, W, 3) uint8 RGB and (H, W) body-id labels seen from the camera pose.
 
+        Blur and noise are worked in floats and the result cut to uint8 (truncated, not
+        rounded: with noise on, a frame is about half a grey level darker than the renderer's).
+
         ``position`` (3,) and ``rotation`` (3, 3) are the camera frame in the field frame;
         ``yaw_rate_rps`` is the camera's turn rate, for motion blur.
         """

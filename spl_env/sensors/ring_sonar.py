@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from perception.geometry import FloatArray
-from perception.validation import check_int, check_positive
+from perception.validation import check_int, check_positive, finite_vector
 from spl_env.robots.diff_drive import DiffDriveConfig, sonar_ring_rays
 from spl_env.sensors.raycast import RayCaster, cast
 
@@ -58,8 +58,10 @@ class RingSonar:
         self._offsets = math.radians(config.cone_deg) * offsets  # (n,) rad about each axis
 
     def rays(self, robot_pose: ArrayLike) -> tuple[FloatArray, FloatArray]:
-        """Field-frame ray (starts, ends), each (S * rays_per_sonar, 3) (m), sonar-major."""
-        return sonar_ring_rays(self.robot, robot_pose, self.config.max_range_m, self._offsets)
+        """Field-frame ray (starts, ends), each (S * rays_per_sonar, 3) (m), sonar-major, from
+        the robot at ``robot_pose``, the (3,) field pose ``(x, y, theta)``."""
+        pose = finite_vector(robot_pose, "robot_pose", 3)  # a NaN would read as no echo
+        return sonar_ring_rays(self.robot, pose, self.config.max_range_m, self._offsets)
 
     def measure(
         self,

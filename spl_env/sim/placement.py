@@ -76,18 +76,21 @@ class Placement:
         self._reach = robot_radius_m + self.obstacles[:, 2]
 
     def collides(self, xy: FloatArray, robots: Sequence[Mobile], clearance: float) -> bool:
-        """Whether a robot at ``xy`` (2,) overlaps one of ``robots``, a post or a pole, or leaves
-        the carpet, with ``clearance`` (m) to spare."""
+        """Whether a robot at ``xy`` (2,) overlaps one of ``robots``, a post or a pole with
+        ``clearance`` (m) to spare, or leaves the carpet (the edge takes no clearance)."""
         return self.obstruction(xy, robots, clearance) is not None
 
     def obstruction(
         self, xy: FloatArray, robots: Sequence[Mobile], clearance: float
     ) -> FloatArray | None:
-        """Where a robot at ``xy`` (2,) would touch what it overlaps (with ``clearance`` m to
-        spare): the point (2,) (m) of the carpet's edge it crosses, or the centre of the first
-        robot, post or pole it overlaps; None when it is clear."""
+        """Where a robot at ``xy`` (2,) would touch what it overlaps: the point (2,) (m) of the
+        carpet's edge it crosses, or the centre of the first robot, post or pole it overlaps
+        with ``clearance`` (m) to spare (the edge takes none); None when it is clear. A
+        non-finite ``xy`` raises ValueError."""
         r = self.robot_radius_m
         x, y = float(xy[0]), float(xy[1])
+        if not (math.isfinite(x) and math.isfinite(y)):
+            raise ValueError(f"xy must be a finite (2,) position, got {xy!r}")
         half_l, half_w = self._half_extent
         if abs(x) > half_l or abs(y) > half_w:
             edge = np.array([np.clip(x, -half_l, half_l), np.clip(y, -half_w, half_w)])

@@ -160,3 +160,8 @@ def test_a_blocked_robot_pivots_away_from_what_it_hit(field: Field) -> None:
         assert blocked and increment[0] > 0.0
         np.testing.assert_allclose(robot.pose, [0.0, 0.0, turn * rate * 0.1], atol=1e-12)
     world.close()
+
+
+def test_a_position_that_is_not_finite_is_refused_not_taken_as_clear(field: Field) -> None:
+    with pytest.raises(ValueError, match="xy must be a finite"):
+        field.placement.obstruction(np.array([math.nan, 0.0]), [], clearance=0.0)

@@ -335,3 +335,9 @@ def test_config_accepts_zero_noise_and_defaults() -> None:
     config = RingSonarConfig()
     assert (config.cone_deg, config.rays_per_sonar) == (30.0, 7)
     assert (config.min_range_m, config.max_range_m, config.range_noise_std_m) == (0.15, 5.0, 0.01)
+
+
+@pytest.mark.parametrize("pose", [[math.nan, 0.0, 0.0], [0.0, math.inf, 0.0], [0.0, 0.0]])
+def test_a_pose_that_is_not_finite_or_not_3_is_refused_not_heard_as_silence(pose) -> None:
+    with pytest.raises(ValueError, match="robot_pose"):
+        RingSonar(QUIET, ROBOT).rays(pose)

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from perception.geometry import project_points
-from spl_env.robots.nao import NaoRobot, RobotConfig
+from spl_env.robots.nao import NaoCommand, NaoRobot, RobotConfig
 from spl_env.scenes.spl_field import (
     POSTER_SETS,
     SceneBodies,
@@ -467,3 +467,17 @@ def test_equal_meshes_hand_pybullet_the_same_lists() -> None:
     assert first["vertices"] == corners.tolist() and first["indices"] == [0, 1, 2, 0, 2, 3]
     assert first["normals"] == up.tolist() and "uvs" not in first
     assert other["vertices"] != first["vertices"]
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [
+        ({"walk": np.array([math.nan, 0.0, 0.0])}, "NaoCommand.walk"),
+        ({"walk": np.zeros(2)}, "NaoCommand.walk"),
+        ({"head": np.array([0.0, math.inf])}, "NaoCommand.head"),
+    ],
+)
+def test_a_nao_command_that_is_not_finite_is_refused(kwargs: dict, name: str) -> None:
+    """A NaN walk would stay in the walk engine's velocity for good, whatever came after."""
+    with pytest.raises(ValueError, match=name):
+        NaoCommand(**kwargs)
