@@ -168,13 +168,14 @@ class CircleMapper:
         pose_cov: ArrayLike,
     ) -> tuple[MappedCircle, ...]:
         """Fuse one scan: beam ``angles`` (B,) (rad, robot frame) and ``ranges`` (B,) (m, NaN
-        for no return) from a scanner ``mount_x_m`` ahead of the robot origin, seen from the
+        or +inf for no return) from a scanner ``mount_x_m`` ahead of the robot origin, seen from the
         believed ``pose`` (3,) (field frame) with covariance ``pose_cov`` (3, 3). Returns
         :attr:`circles`."""
         check_finite("CircleMapper.update", "mount_x_m", mount_x_m)
         pose = finite_vector(pose, "pose", 3)
         pose_cov = check_covariance(pose_cov, "pose_cov", 3, singular_ok=True)
-        scan = np.asarray(ranges, dtype=np.float64)
+        scan = np.array(ranges, dtype=np.float64)
+        scan[np.isposinf(scan)] = np.nan  # no return: not a return from beyond a circle
         updated: set[int] = set()
         for segment in segment_breakpoints(angles, ranges, self.config.segmentation):
             candidate = self._candidate(segment, scan, pose, mount_x_m)

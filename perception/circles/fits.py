@@ -110,8 +110,10 @@ def geometric_initialisation(points: ArrayLike) -> CircleFit:
     """Seed 001 §4.4.1 Algorithm 2: the mean centre and radius of the circles through triplets.
 
     ``points`` (N, 2) (m, sensor frame), in scan order. With ``m = N // 3``, triplet ``k`` is
-    ``(p[k], p[k + m], p[k + 2m])``: each point is used once, as in the seed, and each triplet
-    spans the segment, like the seed's worked example (first, middle and last points). The
+    ``(p[k], p[k + m], p[k + 2m])``: each point is used at most once, as in the seed, and each
+    triplet spans the first ``3m`` points, like the seed's worked example (first, middle and
+    last points) when N is a multiple of 3; the last ``N - 3m`` points (one or two) are left
+    out, so 4 or 5 points give one triplet of the first three, a narrower arc. The
     seed draws the triplets at random, which can put close points together, whose circle
     noise throws far off (its §4.5 reports large maximal errors). Each circle's radius is its
     distance to the triplet's first point; triplets of collinear points are skipped,
@@ -301,6 +303,8 @@ def _algebraic_fit(owner: str, points: ArrayLike, constraint: FloatArray) -> Cir
         raise ValueError(f"{owner}: the points all coincide, no circle fits them")
     q = (p - centroid) / scale
     Z = np.column_stack([(q**2).sum(axis=1), q, np.ones(len(q))])
+    if len(Z) < 4:  # three points: a zero row keeps Z^T Z and gives the SVD its null vector
+        Z = np.vstack([Z, np.zeros((4 - len(Z), 4))])
     _, s, Vt = np.linalg.svd(Z, full_matrices=False)
     if s[-1] <= _DEGENERATE_RTOL * s[0]:
         coefficients = Vt[-1]

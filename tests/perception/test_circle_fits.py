@@ -90,6 +90,19 @@ def test_three_points_of_a_right_triangle_give_the_thales_circle() -> None:
     np.testing.assert_allclose(fit.R, math.sqrt(2.0), rtol=1e-15)
 
 
+@pytest.mark.parametrize("fit", [taubin_fit, hyper_fit, geometric_fit])
+def test_the_least_squares_fits_pass_through_three_points_exactly(fit) -> None:
+    """Three points fix a circle: the algebraic fits' SVD had lost its null vector with three
+    rows (Taubin gave R 1.44, Hyper 0.94 for the unit circle)."""
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        centre, radius = rng.uniform(-2.0, 2.0, 2), rng.uniform(0.05, 1.0)
+        angles = np.sort(rng.uniform(-math.pi, math.pi, 3))
+        result = fit(on_circle(tuple(centre), radius, angles))
+        np.testing.assert_allclose(result.centre, centre, atol=1e-8 * (1 + radius))
+        np.testing.assert_allclose(result.R, radius, rtol=1e-8)
+
+
 def test_three_points_with_a_horizontal_chord_give_their_circle() -> None:
     # p1 and p2 share y: the seed's closed form for y_c divides by y2 - y1 = 0
     p1, p2, p3 = on_circle((0.3, 1.2), 0.5, np.array([math.pi / 6, 5 * math.pi / 6, -1.0]))

@@ -14,6 +14,7 @@ import pytest
 
 from perception.circles.circle_map import CircleMapConfig, CircleMapper
 from perception.circles.segmentation import BreakpointConfig
+from perception.sensor_models import LaserModel
 
 ANGLES = np.radians(-90.0 + 0.25 * np.arange(720))  # 0.25° beams over 180°
 SIGMA = 0.02
@@ -138,3 +139,28 @@ def test_bad_pose_and_covariance_are_refused() -> None:
         mapper.update(ANGLES, ranges, 0.0, np.array([0.0, np.nan, 0.0]), TINY_COV)
     with pytest.raises(ValueError, match="pose_cov"):
         mapper.update(ANGLES, ranges, 0.0, np.zeros(3), -TINY_COV)
+
+
+def test_beams_without_return_as_inf_or_nan_are_alike() -> None:
+    """A beam with no return, NaN or +inf, says nothing of what lies beyond a mapped circle:
+    three scans blank over a confirmed pole keep it either way (+inf had counted as a return
+    from behind it, dropping the pole)."""
+    angles = LaserModel().beam_angles()
+    pole = np.array([1.2, 0.05, 0.05])  # centre (m), radius (m)
+    rho, phi = math.hypot(*pole[:2]), math.atan2(pole[1], pole[0])
+    offset = angles - phi
+    inside = pole[2] ** 2 - (rho * np.sin(offset)) ** 2
+    hit = (inside >= 0) & (np.cos(offset) > 0)
+    ranges = np.full(len(angles), 8.0)
+    ranges[hit] = rho * np.cos(offset[hit]) - np.sqrt(inside[hit])
+    kept = {}
+    for no_return in (math.nan, math.inf):
+        mapper = CircleMapper()
+        for _ in range(12):
+            mapper.update(angles, ranges, 0.0, np.zeros(3), np.diag([1e-4] * 3))
+        assert [c.confirmed for c in mapper.circles] == [True]
+        blank = np.where(np.abs(offset) < 0.2, no_return, ranges)
+        for _ in range(3):
+            mapper.update(angles, blank, 0.0, np.zeros(3), np.diag([1e-4] * 3))
+        kept[no_return] = len(mapper.circles)
+    assert list(kept.values()) == [1, 1]
