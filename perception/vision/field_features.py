@@ -33,7 +33,9 @@ and direction conventions in that module's table). Steps:
    circle's direction and, where it crosses the circle, two ``x_junction`` s. The white of
    the centre mark is not reported as a penalty mark.
 5. **Penalty marks**: white components ringed by green whose ground extent is a mark's
-   (``mark_size_m``; a ball stretches far along the view on the ground), clear of lines.
+   (``mark_size_m``) and as long along the view as across it (``mark_elongation_slack_m``):
+   a ball, standing up, stretches along the view on the ground, too far from 0.8 m out and
+   by 0.05 m or more nearer; clear of lines.
    **Goal posts**: tall narrow white columns standing on the carpet, their foot projected
    and moved ``post_diameter_m / 2`` along the view to the post's centre
    (:func:`~perception.vision.field_pixels.post_feet`). **Field edge**: the carpet's top edge
@@ -138,6 +140,9 @@ class FieldFeatureConfig:
     min_circle_arc_deg: float = 45.0  # the points must cover this arc about the centre
     centre_line_m: float = 0.15  # a segment this close (m) to the circle's centre crosses it
     mark_size_m: tuple[float, float] = (0.06, 0.2)  # penalty mark extent (0.1 m square)
+    mark_elongation_slack_m: float = 0.025  # along the view no longer than across plus this
+    # (and a pixel's footprint): the ball 0.5-0.7 m ahead is 0.05-0.09 m longer (its blob
+    # taken as lying on the ground)
     mark_px: tuple[int, int] = (3, 2000)  # pixel count of a mark's component
     mark_green_fraction: float = 0.9  # of the ring around a mark
     mark_clearance_m: float = 0.3  # marks lie this far (m) from any line (1.3 m on the field)
@@ -415,7 +420,8 @@ def _marks(
 ) -> list[FieldFeature]:
     """Penalty marks: small white blobs ringed by green, at least 2 px each way, within
     ``mark_max_range_m``, whose ground extent along and across the view (pixel centres' spread
-    plus one pixel's footprint) is within ``mark_size_m``; not at the circle's centre (the
+    plus one pixel's footprint) is within ``mark_size_m`` and no longer along than across by
+    more than a footprint and ``mark_elongation_slack_m``; not at the circle's centre (the
     centre mark) nor within ``mark_clearance_m`` of a line (a far line thinner than a pixel is
     drawn broken into such blobs)."""
     cfg, projection = frame.config, frame.projection
@@ -439,9 +445,12 @@ def _marks(
             continue
         if any(s.distance(centre) < cfg.mark_clearance_m for s in segments):
             continue
-        extent = ground_extent(blob, points[1:], centre, projection)
+        extent, footprint = ground_extent(blob, points[1:], centre, projection)
         lo, hi = cfg.mark_size_m
-        if (extent >= lo).all() and (extent <= hi).all():
+        # a square is as long along the view as across it, however it is turned; a pixel's
+        # footprint more at most, measured (the ball near the feet is longer: it stands up)
+        square = extent[0] - extent[1] <= footprint[0] + cfg.mark_elongation_slack_m
+        if (extent >= lo).all() and (extent <= hi).all() and square:
             cov = frame.covariances(blob.centroid[None], centre[None])
             out.append(FieldFeature.trusted("penalty_mark", centre[None], cov))
     return out

@@ -374,15 +374,16 @@ def blobs(
 
 def ground_extent(
     blob: Blob, points: FloatArray, centre: FloatArray, projection: GroundProjection
-) -> FloatArray:
+) -> tuple[FloatArray, FloatArray]:
     """(2,) extent (m) of a ``blob`` on the ground along and across the view to its
     ``centre`` (2,) m: the spread of its pixels' ground ``points`` (K, 2) plus one pixel's
-    footprint there."""
+    footprint there; and that footprint (2,) m, along and across."""
     view = centre / max(float(np.hypot(*centre)), 1e-9)
     axes = np.array([view, [-view[1], view[0]]])
     spread = (points - centre) @ axes.T
     footprint = np.abs(axes @ projection.jacobians(blob.centroid[None])[0]).sum(axis=1)
-    return np.asarray(spread.max(axis=0) - spread.min(axis=0) + footprint, dtype=np.float64)
+    extent = spread.max(axis=0) - spread.min(axis=0) + footprint
+    return np.asarray(extent, dtype=np.float64), np.asarray(footprint, dtype=np.float64)
 
 
 def cut_ends(ends_px: FloatArray, clear: BoolImage, border_px: float) -> NDArray[np.bool_]:

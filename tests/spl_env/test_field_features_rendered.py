@@ -352,3 +352,50 @@ def test_row_offset_removes_the_renderers_range_bias(clear: Rig) -> None:
             elif f.kind in (*JUNCTION_KINDS, "centre_circle", "penalty_mark"):
                 error = min(np.hypot(*(p[0] - t.points[0])) for t in FIELD.of_kind(f.kind))
                 assert error < 0.02, f"{f.kind} at {p[0].round(3)} off by {error:.3f}"
+
+
+def test_a_ball_at_the_feet_is_no_penalty_mark() -> None:
+    """The ball 0.4-0.9 m ahead on a carpet without markings, seen by the top camera pitched
+    down as a striker's head looks at it: no penalty mark (its white blob, taken as lying on
+    the ground, is a little longer along the view than a mark, which is as long as it is wide:
+    it had passed the size test from 0.5 to 0.7 m)."""
+    world = BulletWorld(time_step_s=0.01)
+    try:
+        world.add_static(
+            "carpet",
+            [
+                VisualPart(
+                    shape="box", size=(20.0, 20.0, 0.01), position=(0, 0, -0.01), rgba=CARPET_RGBA
+                )
+            ],
+        )
+        world.add_sphere(
+            "ball",
+            radius_m=0.05,
+            mass_kg=0.044,
+            position=(0.5, 0.0, 0.05),
+            rgba=BALL_RGBA,
+            rolling_friction=0.0,
+            restitution=0.0,
+        )
+        robot = NaoRobot(world, "self", team=0, config=RobotConfig())
+        camera = Camera(CameraConfig())
+        marks = []
+        for distance in (0.4, 0.5, 0.6, 0.7, 0.8, 0.9):
+            for lateral in (-0.15, 0.0, 0.15):
+                world.set_pose("ball", (distance, lateral, 0.05), 0.0)
+                for pitch in (0.3, 0.4, 0.515):
+                    robot.place(np.zeros(3), head=np.array([0.0, pitch]))
+                    position, rotation = robot.camera_pose_world()
+                    image, _ = camera.render(
+                        world,
+                        position,
+                        rotation,
+                        EpisodeLighting.default(),
+                        np.random.default_rng(0),
+                    )
+                    found = detect_field_features(image, camera.config.model, robot.camera_state())
+                    marks += [(distance, lateral, pitch) for f in found if f.kind == "penalty_mark"]
+        assert marks == []
+    finally:
+        world.close()
