@@ -422,7 +422,8 @@ class CnnPoleDetector:
     def detect_objects_downscaled(self, image: NDArray[np.uint8], factor: int) -> list[Detection]:
         """:meth:`detect_objects` on ``image`` (H, W, 3) uint8 RGB shrunk ``factor`` times (area
         averaging, the bottom rows repeated up to a multiple of the network's stride), boxes and
-        keypoints mapped back to ``image``'s pixels (``u = factor * u_small + (factor - 1) / 2``).
+        keypoints mapped back to ``image``'s pixels (``u = factor * u_small + (factor - 1) / 2``
+        where ``factor`` divides the image's size; else by the true scale of each axis).
         For objects nearer, and so larger, than the network saw in training: B-Human reads the
         Nao's lower camera at half the upper one's resolution."""
         import cv2
@@ -441,14 +442,16 @@ class CnnPoleDetector:
         found = decode(
             output, len(self.classes), self.config.score_threshold, self.config.max_detections
         )
-        shift = (factor - 1) / 2
+        # pixel centres: u = s (u_small + 1/2) - 1/2 with s the true scale on each axis (the
+        # image's size over the shrunk one's: factor where it divides the size)
+        scale = np.array([image.shape[1] / width, image.shape[0] / height])
         return [
             Detection(
                 class_name=self.classes[c],
                 class_id=int(c),
-                box=found.boxes[k].astype(np.float64) * factor + shift,
+                box=np.tile(scale, 2) * (found.boxes[k].astype(np.float64) + 0.5) - 0.5,
                 score=float(found.scores[k]),
-                keypoint=found.keypoints[k].astype(np.float64) * factor + shift,
+                keypoint=scale * (found.keypoints[k].astype(np.float64) + 0.5) - 0.5,
             )
             for k, c in enumerate(found.class_ids)
         ]

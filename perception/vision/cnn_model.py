@@ -117,8 +117,10 @@ def fuse_batch_norms(module: nn.Module) -> nn.Module:
 
 
 def image_tensor(images: NDArray[np.uint8]) -> torch.Tensor:
-    """(N, H, W, 3) uint8 RGB -> (N, 3, H, W) float32 in [0, 1], channels-last in memory."""
-    return torch.from_numpy(images).permute(0, 3, 1, 2).float().mul_(1.0 / 255.0)
+    """(N, H, W, 3) uint8 RGB (any strides: a flipped view is copied) -> (N, 3, H, W) float32
+    in [0, 1], channels-last in memory."""
+    pixels = np.ascontiguousarray(images)  # torch takes no negative strides
+    return torch.from_numpy(pixels).permute(0, 3, 1, 2).float().mul_(1.0 / 255.0)
 
 
 @dataclass(frozen=True)

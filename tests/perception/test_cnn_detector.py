@@ -12,7 +12,7 @@ import torch
 
 from perception.geometry import project_points
 from perception.types import CameraModel, CameraState, PoleCode, PoleGeometry
-from perception.vision import CnnDetectorConfig, CnnPoleDetector, Detection
+from perception.vision import CnnDetectorConfig, CnnPoleDetector, Detection, cnn_model
 from perception.vision.cnn_detector import (
     PoleExtents,
     PoleRangeModel,
@@ -25,6 +25,7 @@ from perception.vision.cnn_detector import (
 from perception.vision.cnn_model import (
     N_REGRESSION,
     STRIDE,
+    Decoded,
     NetConfig,
     PoleNet,
     decode,
@@ -346,3 +347,39 @@ def test_weights_are_saved_whole_or_not_at_all(tmp_path: Path) -> None:
         save(path, {"format": 2, "bad": lambda: None})
     assert path.read_bytes() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["weights.pt"]
+
+
+def test_a_flipped_view_is_read_as_its_copy(detector: CnnPoleDetector) -> None:
+    """A negative-stride image (a view flipped left to right) is what its copy is; torch takes
+    no negative strides."""
+    image = np.random.default_rng(0).integers(0, 255, (CAMERA.height, CAMERA.width, 3), np.uint8)
+    flipped = image[:, ::-1]
+    copied = np.ascontiguousarray(flipped)
+    assert [d.box.tolist() for d in detector.detect_objects(flipped)] == [
+        d.box.tolist() for d in detector.detect_objects(copied)
+    ]
+
+
+@pytest.mark.parametrize("factor", [2, 3, 7])
+def test_downscaled_detections_map_the_shrunk_image_onto_the_whole_frame(
+    detector: CnnPoleDetector, factor: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A box over the whole shrunk image (pixel edges -1/2 to size - 1/2) comes back over the
+    whole frame, and the shrunk image's first pixel centre at the centre of the frame's pixels
+    it averaged, whether or not ``factor`` divides the frame's size (320 x 240: 7 does not)."""
+    width, height = CAMERA.width // factor, CAMERA.height // factor
+
+    def one_box(*_: object) -> Decoded:
+        return Decoded(
+            class_ids=np.array([0]),
+            scores=np.array([0.9], np.float32),
+            keypoints=np.array([[0.0, 0.0]], np.float32),
+            boxes=np.array([[-0.5, -0.5, width - 0.5, height - 0.5]], np.float32),
+        )
+
+    monkeypatch.setattr(cnn_model, "decode", one_box)
+    image = np.zeros((CAMERA.height, CAMERA.width, 3), np.uint8)
+    (found,) = detector.detect_objects_downscaled(image, factor)
+    np.testing.assert_allclose(found.box, [-0.5, -0.5, CAMERA.width - 0.5, CAMERA.height - 0.5])
+    area = np.array([CAMERA.width / width, CAMERA.height / height])  # frame pixels per pixel
+    np.testing.assert_allclose(found.keypoint, (area - 1) / 2)
