@@ -239,28 +239,34 @@ def test_centre_circle_centre_and_halfway_direction(clear: Rig) -> None:
             assert abs(error) < math.radians(2.0)
 
 
+def bare_carpet(ball_xy: tuple[float, float]) -> BulletWorld:
+    """A world of a carpet without markings, 20 m square, and the ball at ``ball_xy`` (m)."""
+    world = BulletWorld(time_step_s=0.01)
+    world.add_static(
+        "carpet",
+        [
+            VisualPart(
+                shape="box", size=(20.0, 20.0, 0.01), position=(0, 0, -0.01), rgba=CARPET_RGBA
+            )
+        ],
+    )
+    world.add_sphere(
+        "ball",
+        radius_m=0.05,
+        mass_kg=0.044,
+        position=(*ball_xy, 0.05),
+        rgba=BALL_RGBA,
+        rolling_friction=0.0,
+        restitution=0.0,
+    )
+    return world
+
+
 def test_empty_carpet_yields_nothing() -> None:
     """A carpet without markings, as far as the camera sees, with a robot and a ball on it:
     no lines, junctions, circle, marks or posts (and no carpet edge in view)."""
-    world = BulletWorld(time_step_s=0.01)
+    world = bare_carpet((1.2, -0.3))
     try:
-        world.add_static(
-            "carpet",
-            [
-                VisualPart(
-                    shape="box", size=(20.0, 20.0, 0.01), position=(0, 0, -0.01), rgba=CARPET_RGBA
-                )
-            ],
-        )
-        world.add_sphere(
-            "ball",
-            radius_m=0.05,
-            mass_kg=0.044,
-            position=(1.2, -0.3, 0.05),
-            rgba=BALL_RGBA,
-            rolling_friction=0.0,
-            restitution=0.0,
-        )
         robot = NaoRobot(world, "self", team=0, config=RobotConfig())
         NaoRobot(world, "other", team=1, config=RobotConfig()).place(np.array([1.8, 0.4, 2.5]))
         camera = Camera(CameraConfig())
@@ -359,25 +365,8 @@ def test_a_ball_at_the_feet_is_no_penalty_mark() -> None:
     down as a striker's head looks at it: no penalty mark (its white blob, taken as lying on
     the ground, is a little longer along the view than a mark, which is as long as it is wide:
     it had passed the size test from 0.5 to 0.7 m)."""
-    world = BulletWorld(time_step_s=0.01)
+    world = bare_carpet((0.5, 0.0))
     try:
-        world.add_static(
-            "carpet",
-            [
-                VisualPart(
-                    shape="box", size=(20.0, 20.0, 0.01), position=(0, 0, -0.01), rgba=CARPET_RGBA
-                )
-            ],
-        )
-        world.add_sphere(
-            "ball",
-            radius_m=0.05,
-            mass_kg=0.044,
-            position=(0.5, 0.0, 0.05),
-            rgba=BALL_RGBA,
-            rolling_friction=0.0,
-            restitution=0.0,
-        )
         robot = NaoRobot(world, "self", team=0, config=RobotConfig())
         camera = Camera(CameraConfig())
         marks = []
