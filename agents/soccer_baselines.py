@@ -55,7 +55,8 @@ def relative_point(pose: FloatArray, cos_b: float, sin_b: float, range_m: float)
 
 
 def believed_ball(obs: dict[str, np.ndarray], pose: FloatArray) -> FloatArray | None:
-    """The believed ball (2,) (field frame), or None before it was first seen."""
+    """The believed ball (2,) (field frame), or None while no ball is believed (before it was
+    first seen, and after the ball filter lost it)."""
     if obs["ball_since_seen"][0] >= 1.0:
         return None
     cos_b, sin_b = obs["ball_bearing"]

@@ -37,6 +37,7 @@ from agents.head_options import HeadOptions
 from agents.imitation import WarmStartConfig, imitate, record_teacher
 from agents.options import OptionsWrapper
 from agents.striker_options import StrikerOptions
+from spl_env import HEAD_CONTROL_ENV_IDS
 
 OPTIONS: dict[str, Callable[[gym.Env], OptionsWrapper]] = {
     "head": HeadOptions,
@@ -126,6 +127,11 @@ def train(
     if timesteps < 1:
         raise ValueError(f"timesteps must be >= 1, got {timesteps}")
     check_config(config)
+    if "warm_start" in config and env_id not in HEAD_CONTROL_ENV_IDS:
+        raise ValueError(
+            f"warm_start imitates a scripted head policy, so it needs an env whose action is "
+            f"the head (one of {list(HEAD_CONTROL_ENV_IDS)}), got {env_id!r}"
+        )
     out.mkdir(parents=True, exist_ok=True)
     n_envs, options = config.get("n_envs", 1), config.get("options")
     # the envs take the cores: a second torch thread only spins against them (a 2-core

@@ -403,3 +403,11 @@ def test_training_config_refuses_bad_options(change: dict[str, Any], match: str)
         check_config(config)
     with pytest.raises(ValueError, match=match):  # before any env process starts
         train("SPL/ActiveVision-v0", config, 16, Path("unused"), seed=0)
+
+
+def test_a_warm_start_on_an_env_whose_action_is_not_the_head_is_refused_at_once() -> None:
+    """The warm start imitates a scripted head policy: on a soccer env it is refused before
+    any env or model is made (it had failed later, on the teacher's action shape)."""
+    config = {**load_config(default_config_path("SPL/ActiveVision-v0")), "warm_start": {}}
+    with pytest.raises(ValueError, match=r"warm_start imitates a scripted head policy.*Striker"):
+        train("SPL/Striker-v0", config, 16, Path("unused"), seed=0)
