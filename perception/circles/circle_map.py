@@ -177,7 +177,7 @@ class CircleMapper:
         scan = np.array(ranges, dtype=np.float64)
         scan[np.isposinf(scan)] = np.nan  # no return: not a return from beyond a circle
         updated: set[int] = set()
-        for segment in segment_breakpoints(angles, ranges, self.config.segmentation):
+        for segment in segment_breakpoints(angles, scan, self.config.segmentation):
             candidate = self._candidate(segment, scan, pose, mount_x_m)
             if candidate is not None:
                 updated |= self._fuse(candidate, pose, pose_cov)

@@ -418,19 +418,7 @@ class _View:
         robot = self.robot_points(np.atleast_2d(points))
         seen = np.hypot(robot[:, 0], robot[:, 1]) <= self.config.max_range_m
         near = robot[seen]  # only these are projected: most of the map is out of range
-        ground = np.column_stack([near, np.zeros(len(near))])
-        in_camera = (ground - self.state.position) @ self.rotation
-        cam = self.camera
-        uv, front = project_points(in_camera, cam.fx, cam.fy, cam.cx, cam.cy)
-        m = self.config.margin_px
-        with np.errstate(invalid="ignore"):
-            seen[seen] = (
-                front
-                & (uv[:, 0] >= m)
-                & (uv[:, 0] <= cam.width - 1 - m)
-                & (uv[:, 1] >= m)
-                & (uv[:, 1] <= cam.height - 1 - m)
-            )
+        seen[seen] = self._in_image(np.column_stack([near, np.zeros(len(near))]))
         return seen
 
     def shows_post(self, post: MapFeature) -> bool:
@@ -440,14 +428,24 @@ class _View:
         if height is None:
             return True
         foot = self.robot_points(post.points[:1])
-        point = np.array([[foot[0, 0], foot[0, 1], height]])
+        return bool(self._in_image(np.array([[foot[0, 0], foot[0, 1], height]]))[0])
+
+    def _in_image(self, points: FloatArray) -> NDArray[np.bool_]:
+        """Which robot-frame ``points`` (N, 3) project in front of the camera and inside the
+        image, ``margin_px`` clear of its sides (N,) bool."""
         cam = self.camera
-        uv, front = project_points(
-            (point - self.state.position) @ self.rotation, cam.fx, cam.fy, cam.cx, cam.cy
-        )
+        in_camera = (points - self.state.position) @ self.rotation
+        uv, front = project_points(in_camera, cam.fx, cam.fy, cam.cx, cam.cy)
         m = self.config.margin_px
-        u, v = uv[0]
-        return bool(front[0]) and m <= u <= cam.width - 1 - m and m <= v <= cam.height - 1 - m
+        with np.errstate(invalid="ignore"):
+            return np.asarray(
+                front
+                & (uv[:, 0] >= m)
+                & (uv[:, 0] <= cam.width - 1 - m)
+                & (uv[:, 1] >= m)
+                & (uv[:, 1] <= cam.height - 1 - m),
+                dtype=bool,
+            )
 
     def feature(
         self, feature: MapFeature, points: FloatArray, rng: np.random.Generator | None

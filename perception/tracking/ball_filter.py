@@ -427,8 +427,8 @@ class BallFilter:
         if in_view is not None and not callable(in_view):
             raise TypeError(f"in_view must be a function of a point (2,) or None, got {in_view!r}")
         robot_points = np.zeros((0, 2))
+        # [], () and an empty array: no robot either
         empty = np.size(robots) == 0 if isinstance(robots, np.ndarray) else robots in ([], ())
-        # ([], (), an empty array: no robot)
         if robots is not None and not empty:
             robot_points = finite_points(robots, "robots")
         kick = (

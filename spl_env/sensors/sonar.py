@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -102,7 +103,7 @@ class Sonar:
         out = np.full((N_SONAR_SECTORS, m.max_echoes), np.nan)
         for sector in range(N_SONAR_SECTORS):
             rows = slice(sector * n, (sector + 1) * n)
-            true_echoes = _merged(_surfaces(ranges[rows], hit[rows]), m.echo_merge_m)
+            true_echoes = merge_echoes(surface_echoes(ranges[rows], hit[rows]), m.echo_merge_m)
             if not true_echoes:  # silence: no echo, and no noise to draw
                 continue
             echoes = self._noisy(true_echoes, rng)
@@ -124,25 +125,14 @@ class Sonar:
         return sorted(kept)[: m.max_echoes]
 
 
-def surface_echoes(distances: ArrayLike, bodies: ArrayLike) -> FloatArray:
-    """Nearest distance (E,) of each reflecting surface seen by a fan of rays, unsorted.
+def surface_echoes(distances: Sequence[float], bodies: Sequence[int]) -> list[float]:
+    """Nearest distance (E of them) of each reflecting surface seen by a fan of rays, unsorted.
 
     ``distances`` (R,) are the rays' hit distances (NaN = no hit) and ``bodies`` (R,) the bodies
-    hit (-1 = none), in angular order; a surface is a run of consecutive rays on the same body
-    (one whose nearest distance is not finite gives no echo).
+    hit (-1 = none), in angular order, as lists of floats and ints (a sector's few dozen rays:
+    Python floats cost less than NumPy's calls); a surface is a run of consecutive rays on the
+    same body (one whose nearest distance is not finite gives no echo).
     """
-    ranges = np.asarray(distances, dtype=np.float64).tolist()
-    return np.array(_surfaces(ranges, np.asarray(bodies).tolist()))
-
-
-def merge_echoes(echoes: ArrayLike, merge_m: float) -> FloatArray:
-    """Sorted echoes (K,): each chain of echoes spaced less than ``merge_m`` becomes its nearest
-    (NaN, no echo, is dropped)."""
-    return np.array(_merged(np.asarray(echoes, dtype=np.float64).ravel().tolist(), merge_m))
-
-
-def _surfaces(distances: list[float], bodies: list[int]) -> list[float]:
-    """:func:`surface_echoes` of a fan's ``distances`` and ``bodies`` as lists."""
     nearest: list[float] = []
     surface = -1  # the body of the run the last ray belongs to (-1: no surface)
     for distance, body in zip(distances, bodies, strict=True):
@@ -156,7 +146,8 @@ def _surfaces(distances: list[float], bodies: list[int]) -> list[float]:
     return [d for d in nearest if math.isfinite(d)]
 
 
-def _merged(echoes: list[float], merge_m: float) -> list[float]:
-    """:func:`merge_echoes` of ``echoes`` as a list."""
+def merge_echoes(echoes: Iterable[float], merge_m: float) -> list[float]:
+    """Sorted echoes: each chain of echoes spaced less than ``merge_m`` becomes its nearest
+    (NaN, no echo, is dropped)."""
     e = sorted(x for x in echoes if not math.isnan(x))
     return [x for before, x in itertools.pairwise([-math.inf, *e]) if x - before >= merge_m]

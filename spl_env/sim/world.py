@@ -593,8 +593,8 @@ class BulletWorld:
                 collisionFilterMask=mask,
                 physicsClientId=self.client,
             )
-        ids = np.array([hit[0] for hit in hits], dtype=np.int64).reshape(-1)
-        fractions = np.array([hit[2] for hit in hits], dtype=np.float64).reshape(-1)
+        ids = np.array([hit[0] for hit in hits], dtype=np.int64)
+        fractions = np.array([hit[2] for hit in hits], dtype=np.float64)
         fractions[ids < 0] = 1.0
         return fractions, ids
 

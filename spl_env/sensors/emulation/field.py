@@ -37,6 +37,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable
+from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -160,12 +161,12 @@ class GeometricFieldFeatures:
         world: BulletWorld,
         robot: NaoRobot,
         state: CameraState,
-        which: str,
+        which: Literal["top", "bottom"],
         rng: np.random.Generator,
     ) -> tuple[FieldFeature, ...]:
-        """:meth:`emulate` for ``robot``'s ``which`` camera ("top" or "bottom") at the joints'
-        ``state``, hidden where bodies of ``world`` stand in front of the true camera."""
-        position = robot.camera_pose_world("bottom" if which == "bottom" else "top")[0]
+        """:meth:`emulate` for ``robot``'s ``which`` camera at the joints' ``state``, hidden
+        where bodies of ``world`` stand in front of the true camera."""
+        position = robot.camera_pose_world(which)[0]
         hidden = occlusion(world, position, self.post_bodies)
         return self.emulate(robot.pose, state, true_camera(robot, which), rng, hidden)
 
